@@ -1,0 +1,86 @@
+#include "commands.h"
+
+#include "accel/partitions.h"
+#include "io/mesh_io.h"
+#include "mesh/mesh_stats.h"
+
+#include <nlohmann/json.hpp>
+
+#include <cstdio>
+#include <memory>
+
+namespace uvr {
+
+namespace {
+
+struct InfoOptions {
+  std::string mesh;
+  bool json = false;
+};
+
+void runInfo(const InfoOptions &o) {
+  const Mesh mesh = loadMesh(o.mesh);
+  const VolumeStats volumes = volumeStats(mesh);
+  const Box3f bounds = mesh.bounds();
+  const uint32_t partitions = mesh.cellCount() > 0 ? buildPartitions(makeMeshView(mesh, -1), kDefaultLeafSize).count() : 0;
+
+  nlohmann::json fields = nlohmann::json::array();
+  for (const ScalarField &field : mesh.fields) {
+    const ValueRange range = valueRange(field);
+    fields.push_back({{"name", field.name},
+                      {"centering", field.centering == Centering::Point ? "point" : "cell"},
+                      {"min", range.min},
+                      {"max", range.max}});
+  }
+  nlohmann::json info = {
+      {"points", mesh.points.size()},
+      {"cells", mesh.cellCount()},
+      {"cell_types",
+       {{"tet", mesh.tetCount()},
+        {"hex", mesh.hexCount()},
+        {"wedge", mesh.wedgeCount()},
+        {"pyramid", mesh.pyramidCount()},
+        {"skipped", mesh.skippedCells}}},
+      {"fields", fields},
+      {"bounds", {bounds.lower.x, bounds.upper.x, bounds.lower.y, bounds.upper.y, bounds.lower.z, bounds.upper.z}},
+      {"inverted_cells", mesh.invertedCells},
+      {"volume_min", volumes.min},
+      {"volume_median", volumes.median},
+      {"volume_max", volumes.max},
+      {"partitions", partitions},
+  };
+  if (o.json) {
+    std::printf("%s\n", info.dump(2).c_str());
+    return;
+  }
+  std::printf("%s\n", o.mesh.c_str());
+  std::printf("  points          %zu\n", mesh.points.size());
+  std::printf("  cells           %llu (tet %llu, hex %llu, wedge %llu, pyramid %llu; skipped %llu "
+              "lower-dimensional)\n",
+              static_cast<unsigned long long>(mesh.cellCount()), static_cast<unsigned long long>(mesh.tetCount()),
+              static_cast<unsigned long long>(mesh.hexCount()), static_cast<unsigned long long>(mesh.wedgeCount()),
+              static_cast<unsigned long long>(mesh.pyramidCount()),
+              static_cast<unsigned long long>(mesh.skippedCells));
+  for (const ScalarField &field : mesh.fields) {
+    const ValueRange range = valueRange(field);
+    std::printf("  field           %s (%s) [%g, %g]\n", field.name.c_str(),
+                field.centering == Centering::Point ? "point" : "cell", range.min, range.max);
+  }
+  std::printf("  bounds          [%g, %g] x [%g, %g] x [%g, %g]\n", bounds.lower.x, bounds.upper.x, bounds.lower.y,
+              bounds.upper.y, bounds.lower.z, bounds.upper.z);
+  std::printf("  inverted cells  %llu\n", static_cast<unsigned long long>(mesh.invertedCells));
+  std::printf("  cell volume     min %g, median %g, max %g\n", volumes.min, volumes.median, volumes.max);
+  std::printf("  partitions      %u (leaf size %u)\n", partitions, kDefaultLeafSize);
+}
+
+} // namespace
+
+void addInfoCommand(CLI::App &app) {
+  auto options = std::make_shared<InfoOptions>();
+  CLI::App *cmd = app.add_subcommand("info", "Describe a mesh: cells, fields, bounds, cell volumes, partitions");
+  cmd->add_option("MESH", options->mesh, "Mesh file (.vtu, .vtk)")->required();
+  cmd->add_flag("--json", options->json, "Print JSON");
+  cmd->callback([options] { runInfo(*options); });
+}
+
+} // namespace uvr

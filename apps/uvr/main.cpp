@@ -1,0 +1,29 @@
+// uvr: renders unstructured volumes with empty-space skipping and adaptive sampling.
+#include "commands.h"
+#include "core/error.h"
+
+#include <cstdio>
+#include <new>
+
+int main(int argc, char **argv) {
+  CLI::App app{"uvr: fast volume rendering of unstructured meshes (tetrahedra, hexahedra, wedges, pyramids)"};
+  app.require_subcommand(1);
+  uvr::addRenderCommand(app);
+  uvr::addInfoCommand(app);
+  uvr::addCompareCommand(app);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError &e) {
+    return app.exit(e);
+  } catch (const uvr::Error &e) {
+    std::fprintf(stderr, "uvr: error: %s\n", e.what());
+    return 2;
+  } catch (const std::bad_alloc &) {
+    std::fprintf(stderr, "uvr: error: out of memory\n");
+    return 2;
+  } catch (const std::exception &e) {
+    std::fprintf(stderr, "uvr: error: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}

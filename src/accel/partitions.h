@@ -1,0 +1,100 @@
+// The paper's partitions (§2.1-2.2): leaves of a median-split KD-tree, convex and disjoint, each box shrunk to
+// the cells it holds, with the scalar range of those cells. Flat arrays, usable on host and device.
+#pragma once
+
+#include "core/host_device.h"
+#include "core/vec.h"
+#include "mesh/mesh_view.h"
+
+#include <cstdint>
+#include <vector>
+
+namespace uvr {
+
+/// An inner node splits at `split` on `axis` (0-2) into nodes[child] (below) and nodes[child + 1] (above);
+/// a leaf (axis == kLeaf) is partition `child`.
+struct KdNode {
+  static constexpr uint32_t kLeaf = 3;
+  float split = 0.f;
+  uint32_t axis = kLeaf;
+  uint32_t child = 0;
+};
+
+struct PartitionsView {
+  const KdNode *nodes = nullptr;
+  const Box3f *bounds = nullptr; ///< shrunk box per partition
+  Box3f rootBounds;              ///< the mesh bounds, slightly padded: the KD-tree's root cell
+  uint32_t count = 0;
+};
+
+struct Partitions {
+  std::vector<KdNode> nodes;
+  std::vector<Box3f> bounds;
+  std::vector<float> valueMin, valueMax; ///< scalar range of the cells listed in each partition
+  std::vector<uint64_t> cellCounts;      ///< cells listed (a cell straddling leaves is listed in each)
+  Box3f rootBounds;
+
+  uint32_t count() const { return uint32_t(bounds.size()); }
+  PartitionsView view() const { return {nodes.data(), bounds.data(), rootBounds, count()}; }
+};
+
+/// Median-split KD-tree over cell centroids until a leaf holds at most `leafSize` cells.
+Partitions buildPartitions(const MeshView &mesh, uint32_t leafSize);
+
+/// Default `leafSize`: measured on the brain meshes (see README, "Choosing defaults").
+constexpr uint32_t kDefaultLeafSize = 2048;
+
+/// Visits the partitions that the ray [tMin, tMax] crosses, front to back, as `visit(partition, t0, t1)`
+/// with the ray's exact interval inside the leaf; stops when `visit` returns false. Neighbouring leaves share
+/// the split's t, so the intervals tile the ray with neither gaps nor overlaps.
+template <typename Visit>
+UVR_HOST_DEVICE void traversePartitions(const PartitionsView &parts, const Ray &ray, float tMin, float tMax,
+                                        Visit &&visit) {
+  constexpr int kStackSize = 64;
+  struct Entry {
+    uint32_t node;
+    float t0, t1;
+  };
+  Entry stack[kStackSize];
+  int top = 0;
+  uint32_t node = 0;
+  float t0 = tMin, t1 = tMax;
+  while (true) {
+    const KdNode *n = &parts.nodes[node];
+    while (n->axis != KdNode::kLeaf) {
+      const int axis = int(n->axis);
+      const float origin = ray.origin[axis];
+      const float direction = ray.direction[axis];
+      // The side holding the origin comes first; a ray lying in the plane belongs to the upper side.
+      const bool originBelow = origin < n->split || (origin == n->split && direction < 0.f);
+      const uint32_t nearChild = originBelow ? n->child : n->child + 1;
+      const uint32_t farChild = originBelow ? n->child + 1 : n->child;
+      if (direction == 0.f) {
+        node = origin < n->split ? n->child : n->child + 1;
+      } else {
+        const float tSplit = (n->split - origin) * ray.invDirection[axis];
+        if (tSplit >= t1 || tSplit <= 0.f) {
+          node = nearChild;
+        } else if (tSplit <= t0) {
+          node = farChild;
+        } else {
+          if (top < kStackSize)
+            stack[top++] = {farChild, tSplit, t1};
+          node = nearChild;
+          t1 = tSplit;
+        }
+      }
+      n = &parts.nodes[node];
+    }
+    if (t0 < t1 && !visit(n->child, t0, t1))
+      return;
+    if (top == 0)
+      return;
+    --top;
+    node = stack[top].node;
+    t0 = stack[top].t0;
+    t1 = stack[top].t1;
+  }
+}
+
+} // namespace uvr

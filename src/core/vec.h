@@ -1,0 +1,89 @@
+// Small vector and box math shared by host and device code.
+#pragma once
+
+#include "core/host_device.h"
+
+#include <cmath>
+
+namespace uvr {
+
+struct Vec3f {
+  float x = 0.f, y = 0.f, z = 0.f;
+
+  UVR_HOST_DEVICE float operator[](int i) const { return i == 0 ? x : (i == 1 ? y : z); }
+  UVR_HOST_DEVICE float &operator[](int i) { return i == 0 ? x : (i == 1 ? y : z); }
+};
+
+UVR_HOST_DEVICE inline Vec3f operator+(Vec3f a, Vec3f b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
+UVR_HOST_DEVICE inline Vec3f operator-(Vec3f a, Vec3f b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
+UVR_HOST_DEVICE inline Vec3f operator*(Vec3f a, float s) { return {a.x * s, a.y * s, a.z * s}; }
+UVR_HOST_DEVICE inline Vec3f operator*(float s, Vec3f a) { return a * s; }
+UVR_HOST_DEVICE inline Vec3f operator/(Vec3f a, float s) { return a * (1.f / s); }
+UVR_HOST_DEVICE inline float dot(Vec3f a, Vec3f b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+UVR_HOST_DEVICE inline Vec3f cross(Vec3f a, Vec3f b) {
+  return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
+}
+UVR_HOST_DEVICE inline float length(Vec3f a) { return sqrtf(dot(a, a)); }
+UVR_HOST_DEVICE inline Vec3f normalize(Vec3f a) { return a / length(a); }
+UVR_HOST_DEVICE inline Vec3f vmin(Vec3f a, Vec3f b) { return {fminf(a.x, b.x), fminf(a.y, b.y), fminf(a.z, b.z)}; }
+UVR_HOST_DEVICE inline Vec3f vmax(Vec3f a, Vec3f b) { return {fmaxf(a.x, b.x), fmaxf(a.y, b.y), fmaxf(a.z, b.z)}; }
+
+struct Vec4f {
+  float x = 0.f, y = 0.f, z = 0.f, w = 0.f;
+};
+
+/// Axis-aligned box; empty when lower > upper on any axis.
+struct Box3f {
+  Vec3f lower{INFINITY, INFINITY, INFINITY};
+  Vec3f upper{-INFINITY, -INFINITY, -INFINITY};
+
+  UVR_HOST_DEVICE bool empty() const { return lower.x > upper.x || lower.y > upper.y || lower.z > upper.z; }
+  UVR_HOST_DEVICE void extend(Vec3f p) {
+    lower = vmin(lower, p);
+    upper = vmax(upper, p);
+  }
+  UVR_HOST_DEVICE void extend(const Box3f &b) {
+    lower = vmin(lower, b.lower);
+    upper = vmax(upper, b.upper);
+  }
+  UVR_HOST_DEVICE Vec3f center() const { return (lower + upper) * 0.5f; }
+  UVR_HOST_DEVICE Vec3f size() const { return upper - lower; }
+  UVR_HOST_DEVICE bool contains(Vec3f p) const {
+    return p.x >= lower.x && p.y >= lower.y && p.z >= lower.z && p.x <= upper.x && p.y <= upper.y &&
+           p.z <= upper.z;
+  }
+};
+
+UVR_HOST_DEVICE inline Box3f intersection(const Box3f &a, const Box3f &b) {
+  return {vmax(a.lower, b.lower), vmin(a.upper, b.upper)};
+}
+
+/// Ray with a precomputed reciprocal direction for slab tests.
+struct Ray {
+  Vec3f origin;
+  Vec3f direction;
+  Vec3f invDirection;
+
+  UVR_HOST_DEVICE Vec3f at(float t) const { return origin + direction * t; }
+};
+
+UVR_HOST_DEVICE inline Ray makeRay(Vec3f origin, Vec3f direction) {
+  return {origin, direction, {1.f / direction.x, 1.f / direction.y, 1.f / direction.z}};
+}
+
+/// Slab test; on a hit [t0, t1] is the overlap of the ray with the box, clipped to [tMin, tMax].
+UVR_HOST_DEVICE inline bool intersectBox(const Ray &ray, const Box3f &box, float tMin, float tMax, float &t0,
+                                         float &t1) {
+  for (int axis = 0; axis < 3; ++axis) {
+    const float tLower = (box.lower[axis] - ray.origin[axis]) * ray.invDirection[axis];
+    const float tUpper = (box.upper[axis] - ray.origin[axis]) * ray.invDirection[axis];
+    // NaN (0 * inf on a slab plane) leaves the interval unchanged, as fminf/fmaxf drop NaN.
+    tMin = fmaxf(tMin, fminf(tLower, tUpper));
+    tMax = fminf(tMax, fmaxf(tLower, tUpper));
+  }
+  t0 = tMin;
+  t1 = tMax;
+  return tMin <= tMax;
+}
+
+} // namespace uvr

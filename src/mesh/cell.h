@@ -1,0 +1,230 @@
+// Point location inside one cell and interpolation of the field there, for the four VTK volume cell types.
+// Tetrahedra are linear (barycentric); hexahedra, wedges and pyramids use VTK's isoparametric shape functions,
+// inverted by Newton iteration.
+#pragma once
+
+#include "core/host_device.h"
+#include "core/vec.h"
+#include "mesh/mesh_view.h"
+
+namespace uvr {
+
+/// How far outside [0, 1] a parametric coordinate may lie and still count as inside: points on a face shared
+/// by two cells must be found in one of them despite rounding.
+constexpr float kInsideTolerance = 1e-5f;
+
+UVR_HOST_DEVICE inline float det3(Vec3f a, Vec3f b, Vec3f c) { return dot(a, cross(b, c)); }
+
+/// Barycentric weights of `p` in tetrahedron (a, b, c, d); false when `p` is outside or the cell is flat.
+UVR_HOST_DEVICE inline bool tetWeights(Vec3f a, Vec3f b, Vec3f c, Vec3f d, Vec3f p, float w[4]) {
+  const Vec3f pa = a - p, pb = b - p, pc = c - p, pd = d - p;
+  // Each weight is the volume of the tet with its vertex replaced by p, over the whole volume.
+  const float w0 = det3(pb, pc, pd);
+  const float w1 = det3(pc, pa, pd);
+  const float w2 = det3(pa, pb, pd);
+  const float volume = det3(b - a, c - a, d - a);
+  if (!(volume != 0.f))
+    return false;
+  const float inv = 1.f / volume;
+  w[0] = w0 * inv;
+  w[1] = w1 * inv;
+  w[2] = w2 * inv;
+  w[3] = 1.f - w[0] - w[1] - w[2];
+  const float lo = -kInsideTolerance;
+  return w[0] >= lo && w[1] >= lo && w[2] >= lo && w[3] >= lo;
+}
+
+/// VTK's shape functions and their parametric derivatives for the non-simplex cells.
+template <int N> struct ShapeFunctions {
+  float value[N];
+  Vec3f derivative[N];
+};
+
+UVR_HOST_DEVICE inline void hexShape(Vec3f r, ShapeFunctions<8> &s) {
+  const float u = r.x, v = r.y, w = r.z, iu = 1.f - u, iv = 1.f - v, iw = 1.f - w;
+  s.value[0] = iu * iv * iw;
+  s.value[1] = u * iv * iw;
+  s.value[2] = u * v * iw;
+  s.value[3] = iu * v * iw;
+  s.value[4] = iu * iv * w;
+  s.value[5] = u * iv * w;
+  s.value[6] = u * v * w;
+  s.value[7] = iu * v * w;
+  s.derivative[0] = {-iv * iw, -iu * iw, -iu * iv};
+  s.derivative[1] = {iv * iw, -u * iw, -u * iv};
+  s.derivative[2] = {v * iw, u * iw, -u * v};
+  s.derivative[3] = {-v * iw, iu * iw, -iu * v};
+  s.derivative[4] = {-iv * w, -iu * w, iu * iv};
+  s.derivative[5] = {iv * w, -u * w, u * iv};
+  s.derivative[6] = {v * w, u * w, u * v};
+  s.derivative[7] = {-v * w, iu * w, iu * v};
+}
+
+UVR_HOST_DEVICE inline void wedgeShape(Vec3f r, ShapeFunctions<6> &s) {
+  const float u = r.x, v = r.y, w = r.z, b = 1.f - u - v, iw = 1.f - w;
+  s.value[0] = b * iw;
+  s.value[1] = u * iw;
+  s.value[2] = v * iw;
+  s.value[3] = b * w;
+  s.value[4] = u * w;
+  s.value[5] = v * w;
+  s.derivative[0] = {-iw, -iw, -b};
+  s.derivative[1] = {iw, 0.f, -u};
+  s.derivative[2] = {0.f, iw, -v};
+  s.derivative[3] = {-w, -w, b};
+  s.derivative[4] = {w, 0.f, u};
+  s.derivative[5] = {0.f, w, v};
+}
+
+UVR_HOST_DEVICE inline void pyramidShape(Vec3f r, ShapeFunctions<5> &s) {
+  const float u = r.x, v = r.y, w = r.z, iu = 1.f - u, iv = 1.f - v, iw = 1.f - w;
+  s.value[0] = iu * iv * iw;
+  s.value[1] = u * iv * iw;
+  s.value[2] = u * v * iw;
+  s.value[3] = iu * v * iw;
+  s.value[4] = w;
+  s.derivative[0] = {-iv * iw, -iu * iw, -iu * iv};
+  s.derivative[1] = {iv * iw, -u * iw, -u * iv};
+  s.derivative[2] = {v * iw, u * iw, -u * v};
+  s.derivative[3] = {-v * iw, iu * iw, -iu * v};
+  s.derivative[4] = {0.f, 0.f, 1.f};
+}
+
+UVR_HOST_DEVICE inline void evaluateShape(Vec3f r, ShapeFunctions<8> &s) { hexShape(r, s); }
+UVR_HOST_DEVICE inline void evaluateShape(Vec3f r, ShapeFunctions<6> &s) { wedgeShape(r, s); }
+UVR_HOST_DEVICE inline void evaluateShape(Vec3f r, ShapeFunctions<5> &s) { pyramidShape(r, s); }
+
+/// Whether parametric coordinates lie in the reference cell (unit cube, unit prism, or unit pyramid).
+UVR_HOST_DEVICE inline bool insideReference(Vec3f r, int n) {
+  const float lo = -kInsideTolerance, hi = 1.f + kInsideTolerance;
+  const bool inCube = r.x >= lo && r.y >= lo && r.z >= lo && r.x <= hi && r.y <= hi && r.z <= hi;
+  return n == 6 ? inCube && r.x + r.y <= hi : inCube;
+}
+
+/// Inverts x(r) = sum_i N_i(r) p_i by Newton's method; on success `s` holds the weights at `p`.
+template <int N>
+UVR_HOST_DEVICE inline bool isoparametricWeights(const Vec3f *points, const uint32_t *v, Vec3f p,
+                                                 ShapeFunctions<N> &s) {
+  Vec3f corner[N];
+  Vec3f lower = points[v[0]], upper = points[v[0]];
+  for (int i = 0; i < N; ++i) {
+    corner[i] = points[v[i]];
+    lower = vmin(lower, corner[i]);
+    upper = vmax(upper, corner[i]);
+  }
+  const Vec3f extent = upper - lower;
+  const float scale = fmaxf(extent.x, fmaxf(extent.y, extent.z));
+  if (!(scale > 0.f))
+    return false;
+  const float slack = scale * kInsideTolerance;
+  if (p.x < lower.x - slack || p.y < lower.y - slack || p.z < lower.z - slack || p.x > upper.x + slack ||
+      p.y > upper.y + slack || p.z > upper.z + slack)
+    return false;
+
+  Vec3f r{1.f / 3.f, 1.f / 3.f, 0.5f}; // inside all three reference cells, away from the pyramid's apex
+  for (int iteration = 0; iteration < 12; ++iteration) {
+    evaluateShape(r, s);
+    Vec3f residual = Vec3f{} - p;
+    Vec3f dr{}, ds{}, dt{};
+    for (int i = 0; i < N; ++i) {
+      residual = residual + corner[i] * s.value[i];
+      dr = dr + corner[i] * s.derivative[i].x;
+      ds = ds + corner[i] * s.derivative[i].y;
+      dt = dt + corner[i] * s.derivative[i].z;
+    }
+    // Solve J * delta = residual by Cramer's rule; J's columns are dx/dr, dx/ds, dx/dt.
+    const float det = det3(dr, ds, dt);
+    if (!(det != 0.f))
+      return false;
+    const float inv = 1.f / det;
+    const Vec3f delta{det3(residual, ds, dt) * inv, det3(dr, residual, dt) * inv, det3(dr, ds, residual) * inv};
+    r = r - delta;
+    if (fabsf(delta.x) + fabsf(delta.y) + fabsf(delta.z) < 1e-6f)
+      break;
+    // Far outside after a few steps: no need to converge to say no.
+    if (iteration >= 3 && (fabsf(r.x - 0.5f) > 2.f || fabsf(r.y - 0.5f) > 2.f || fabsf(r.z - 0.5f) > 2.f))
+      return false;
+  }
+  if (!insideReference(r, N))
+    return false;
+  evaluateShape(r, s);
+  return true;
+}
+
+/// Which type a cell index falls on: cells are numbered tets, pyramids, wedges, hexahedra.
+UVR_HOST_DEVICE inline CellType cellType(const MeshView &mesh, uint64_t cell) {
+  if (cell < mesh.tetCount)
+    return CellType::Tetra;
+  cell -= mesh.tetCount;
+  if (cell < mesh.pyramidCount)
+    return CellType::Pyramid;
+  cell -= mesh.pyramidCount;
+  return cell < mesh.wedgeCount ? CellType::Wedge : CellType::Hexahedron;
+}
+
+template <int N>
+UVR_HOST_DEVICE inline bool sampleIsoparametric(const MeshView &mesh, const uint32_t *v, uint64_t cell, Vec3f p,
+                                                float &value) {
+  ShapeFunctions<N> s;
+  if (!isoparametricWeights<N>(mesh.points, v, p, s))
+    return false;
+  if (mesh.cellCentered) {
+    value = mesh.values[cell];
+  } else {
+    value = 0.f;
+    for (int i = 0; i < N; ++i)
+      value += s.value[i] * mesh.values[v[i]];
+  }
+  return true;
+}
+
+/// The field at `p` if `p` lies in `cell`: interpolated for point data, the cell's own value for cell data.
+UVR_HOST_DEVICE inline bool sampleCell(const MeshView &mesh, uint64_t cell, Vec3f p, float &value) {
+  uint64_t local = cell;
+  if (local < mesh.tetCount) {
+    const uint32_t *v = mesh.tets + 4 * local;
+    float w[4];
+    if (!tetWeights(mesh.points[v[0]], mesh.points[v[1]], mesh.points[v[2]], mesh.points[v[3]], p, w))
+      return false;
+    value = mesh.cellCentered ? mesh.values[cell]
+                              : w[0] * mesh.values[v[0]] + w[1] * mesh.values[v[1]] + w[2] * mesh.values[v[2]] +
+                                    w[3] * mesh.values[v[3]];
+    return true;
+  }
+  local -= mesh.tetCount;
+  if (local < mesh.pyramidCount)
+    return sampleIsoparametric<5>(mesh, mesh.pyramids + 5 * local, cell, p, value);
+  local -= mesh.pyramidCount;
+  if (local < mesh.wedgeCount)
+    return sampleIsoparametric<6>(mesh, mesh.wedges + 6 * local, cell, p, value);
+  local -= mesh.wedgeCount;
+  return sampleIsoparametric<8>(mesh, mesh.hexes + 8 * local, cell, p, value);
+}
+
+/// Calls `visit(point)` for each corner point of `cell`.
+template <typename Visit> UVR_HOST_DEVICE void forEachCellVertex(const MeshView &mesh, uint64_t cell, Visit &&visit) {
+  const uint32_t *v;
+  int n;
+  uint64_t local = cell;
+  if (local < mesh.tetCount) {
+    v = mesh.tets + 4 * local, n = 4;
+  } else if ((local -= mesh.tetCount) < mesh.pyramidCount) {
+    v = mesh.pyramids + 5 * local, n = 5;
+  } else if ((local -= mesh.pyramidCount) < mesh.wedgeCount) {
+    v = mesh.wedges + 6 * local, n = 6;
+  } else {
+    local -= mesh.wedgeCount;
+    v = mesh.hexes + 8 * local, n = 8;
+  }
+  for (int i = 0; i < n; ++i)
+    visit(v[i]);
+}
+
+/// Bounding box of one cell.
+UVR_HOST_DEVICE inline Box3f cellBounds(const MeshView &mesh, uint64_t cell) {
+  Box3f box;
+  forEachCellVertex(mesh, cell, [&](uint32_t v) { box.extend(mesh.points[v]); });
+  return box;
+}
+
+} // namespace uvr

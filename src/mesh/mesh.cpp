@@ -1,0 +1,229 @@
+#include "mesh/mesh.h"
+
+#include "core/error.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <string>
+
+namespace uvr {
+
+namespace {
+
+/// Which kept type a VTK cell becomes, and which of its points are the corners. Higher-order cells keep
+/// their corner nodes, which VTK lists first.
+struct CellKind {
+  CellType type;
+  int corners;
+};
+
+bool volumeKind(uint8_t vtkType, CellKind &kind) {
+  switch (vtkType) {
+  case 10: // tetra
+  case 24: // quadratic tetra
+    kind = {CellType::Tetra, 4};
+    return true;
+  case 11: // voxel: a hexahedron with another point order, fixed in addCell
+  case 12: // hexahedron
+  case 25: // quadratic hexahedron
+  case 29: // triquadratic hexahedron
+  case 33: // biquadratic-quadratic hexahedron
+    kind = {CellType::Hexahedron, 8};
+    return true;
+  case 13: // wedge
+  case 26: // quadratic wedge
+  case 31: // quadratic-linear wedge
+  case 32: // biquadratic-quadratic wedge
+    kind = {CellType::Wedge, 6};
+    return true;
+  case 14: // pyramid
+  case 27: // quadratic pyramid
+    kind = {CellType::Pyramid, 5};
+    return true;
+  default:
+    return false;
+  }
+}
+
+/// VTK's 0-, 1- and 2-dimensional cell types (linear, quadratic, Lagrange, Bezier), skipped by a volume
+/// renderer.
+bool lowerDimensional(uint8_t vtkType) {
+  switch (vtkType) {
+  case 1: case 2: case 3: case 4: case 5: case 6: case 7: case 8: case 9:  // vertex .. quad
+  case 21: case 22: case 23: case 28: case 30: case 34: case 35: case 36: // quadratic edge .. polygon
+  case 68: case 69: case 70: case 75: case 76: case 77:                   // Lagrange, Bezier
+    return true;
+  default:
+    return false;
+  }
+}
+
+float orientedVolume(Vec3f a, Vec3f b, Vec3f c, Vec3f d) { return dot(b - a, cross(c - a, d - a)); }
+
+/// Positive for cells wound as VTK expects. Hexahedra and pyramids by the Jacobian at the centre; VTK's wedge
+/// base (0,1,2) faces away from the top, hence its sign.
+float windingSign(CellType type, const uint32_t *v, const std::vector<Vec3f> &p) {
+  switch (type) {
+  case CellType::Tetra:
+    return orientedVolume(p[v[0]], p[v[1]], p[v[2]], p[v[3]]);
+  case CellType::Pyramid: {
+    const Vec3f base = (p[v[0]] + p[v[1]] + p[v[2]] + p[v[3]]) * 0.25f;
+    return dot(cross(p[v[2]] - p[v[0]], p[v[3]] - p[v[1]]), p[v[4]] - base);
+  }
+  case CellType::Wedge: {
+    const Vec3f bottom = (p[v[0]] + p[v[1]] + p[v[2]]) / 3.f;
+    const Vec3f top = (p[v[3]] + p[v[4]] + p[v[5]]) / 3.f;
+    return -dot(cross(p[v[1]] - p[v[0]], p[v[2]] - p[v[0]]), top - bottom);
+  }
+  case CellType::Hexahedron: {
+    auto average = [&](int a0, int a1, int b0, int b1, int c0, int c1, int d0, int d1) {
+      return (p[v[a1]] - p[v[a0]]) + (p[v[b1]] - p[v[b0]]) + (p[v[c1]] - p[v[c0]]) + (p[v[d1]] - p[v[d0]]);
+    };
+    const Vec3f dr = average(0, 1, 3, 2, 4, 5, 7, 6);
+    const Vec3f ds = average(0, 3, 1, 2, 4, 7, 5, 6);
+    const Vec3f dt = average(0, 4, 1, 5, 2, 6, 3, 7);
+    return dot(dr, cross(ds, dt));
+  }
+  }
+  return 0.f;
+}
+
+/// Mirrors a cell: the same shape, the opposite winding.
+void reverseWinding(CellType type, uint32_t *v) {
+  switch (type) {
+  case CellType::Tetra:
+    std::swap(v[1], v[2]);
+    break;
+  case CellType::Pyramid:
+    std::swap(v[1], v[3]);
+    break;
+  case CellType::Wedge:
+    for (int i = 0; i < 3; ++i)
+      std::swap(v[i], v[i + 3]);
+    break;
+  case CellType::Hexahedron:
+    for (int i = 0; i < 4; ++i)
+      std::swap(v[i], v[i + 4]);
+    break;
+  }
+}
+
+} // namespace
+
+int vertexCount(uint8_t vtkType) {
+  CellKind kind;
+  return volumeKind(vtkType, kind) ? kind.corners : 0;
+}
+
+Box3f Mesh::bounds() const {
+  Box3f box;
+  for (const Vec3f &p : points)
+    box.extend(p);
+  return box;
+}
+
+int Mesh::findField(const std::string &name) const {
+  for (size_t i = 0; i < fields.size(); ++i)
+    if (fields[i].name == name)
+      return int(i);
+  return -1;
+}
+
+Mesh buildMesh(UnstructuredGrid &&grid, const std::string &source) {
+  const size_t cellCount = grid.types.size();
+  if (grid.offsets.size() != cellCount + 1)
+    throw Error(source, "", "cell offsets and cell types disagree in count");
+
+  Mesh mesh;
+  std::array<uint64_t, 4> perType{}; // tets, pyramids, wedges, hexes
+  auto slot = [](CellType type) {
+    switch (type) {
+    case CellType::Tetra:
+      return 0;
+    case CellType::Pyramid:
+      return 1;
+    case CellType::Wedge:
+      return 2;
+    case CellType::Hexahedron:
+      return 3;
+    }
+    return 0;
+  };
+
+  for (size_t c = 0; c < cellCount; ++c) {
+    CellKind kind;
+    const uint8_t vtkType = grid.types[c];
+    if (volumeKind(vtkType, kind)) {
+      if (grid.offsets[c + 1] - grid.offsets[c] < kind.corners)
+        throw Error(source, "cell " + std::to_string(c),
+                    "cell of VTK type " + std::to_string(vtkType) + " needs " + std::to_string(kind.corners) +
+                        " points, has " + std::to_string(grid.offsets[c + 1] - grid.offsets[c]));
+      ++perType[slot(kind.type)];
+    } else if (lowerDimensional(vtkType)) {
+      ++mesh.skippedCells;
+    } else {
+      throw Error(source, "cell " + std::to_string(c), "unsupported VTK cell type " + std::to_string(vtkType));
+    }
+  }
+  if (grid.points.size() > UINT32_MAX)
+    throw Error(source, "", "more than 2^32 points are not supported");
+
+  mesh.tets.resize(perType[0] * 4);
+  mesh.pyramids.resize(perType[1] * 5);
+  mesh.wedges.resize(perType[2] * 6);
+  mesh.hexes.resize(perType[3] * 8);
+  std::array<uint32_t *, 4> cursor = {mesh.tets.data(), mesh.pyramids.data(), mesh.wedges.data(),
+                                      mesh.hexes.data()};
+  const std::array<uint64_t, 4> firstCell = {0, perType[0], perType[0] + perType[1],
+                                             perType[0] + perType[1] + perType[2]};
+  std::array<uint64_t, 4> next = firstCell;
+  std::vector<uint64_t> fileToMesh(cellCount, UINT64_MAX);
+
+  for (size_t c = 0; c < cellCount; ++c) {
+    CellKind kind;
+    if (!volumeKind(grid.types[c], kind))
+      continue;
+    const int s = slot(kind.type);
+    uint32_t *v = cursor[s];
+    const int64_t *ids = &grid.connectivity[size_t(grid.offsets[c])];
+    for (int i = 0; i < kind.corners; ++i) {
+      if (ids[i] < 0 || uint64_t(ids[i]) >= grid.points.size())
+        throw Error(source, "cell " + std::to_string(c),
+                    "point index " + std::to_string(ids[i]) + " outside [0, " +
+                        std::to_string(grid.points.size()) + ")");
+      v[i] = uint32_t(ids[i]);
+    }
+    if (grid.types[c] == 11) { // voxel corners run in x-fastest lattice order
+      std::swap(v[2], v[3]);
+      std::swap(v[6], v[7]);
+    }
+    if (windingSign(kind.type, v, grid.points) < 0.f) {
+      reverseWinding(kind.type, v);
+      ++mesh.invertedCells;
+    }
+    cursor[s] += kind.corners;
+    fileToMesh[c] = next[s]++;
+  }
+
+  mesh.points = std::move(grid.points);
+  for (ScalarField &field : grid.fields) {
+    if (field.centering == Centering::Cell) {
+      if (field.values.size() != cellCount)
+        throw Error(source, "", "cell field '" + field.name + "' has " + std::to_string(field.values.size()) +
+                                    " values for " + std::to_string(cellCount) + " cells");
+      std::vector<float> reordered(mesh.cellCount());
+      for (size_t c = 0; c < cellCount; ++c)
+        if (fileToMesh[c] != UINT64_MAX)
+          reordered[fileToMesh[c]] = field.values[c];
+      field.values = std::move(reordered);
+    } else if (field.values.size() != mesh.points.size()) {
+      throw Error(source, "", "point field '" + field.name + "' has " + std::to_string(field.values.size()) +
+                                  " values for " + std::to_string(mesh.points.size()) + " points");
+    }
+    mesh.fields.push_back(std::move(field));
+  }
+  return mesh;
+}
+
+} // namespace uvr

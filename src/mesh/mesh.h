@@ -1,0 +1,65 @@
+// The host mesh: points, cells grouped by type, and scalar fields.
+#pragma once
+
+#include "core/vec.h"
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace uvr {
+
+/// Volume cell types, numbered as VTK numbers them.
+enum class CellType : uint8_t { Tetra = 10, Hexahedron = 12, Wedge = 13, Pyramid = 14 };
+
+enum class Centering : uint8_t { Point, Cell };
+
+/// One scalar value per point or per cell. Arrays with several components become their magnitude.
+struct ScalarField {
+  std::string name;
+  Centering centering = Centering::Point;
+  std::vector<float> values;
+};
+
+/// Cells exactly as VTK files store them (offsets + connectivity + type codes): what every reader produces.
+struct UnstructuredGrid {
+  std::vector<Vec3f> points;
+  std::vector<int64_t> offsets; ///< cell count + 1 entries, offsets[0] == 0
+  std::vector<int64_t> connectivity;
+  std::vector<uint8_t> types; ///< VTK cell type codes, any dimension
+  std::vector<ScalarField> fields;
+};
+
+/// Number of vertices of a volume cell type; 0 for any other VTK type code.
+int vertexCount(uint8_t vtkType);
+
+/// Cells grouped by type in the order tets, pyramids, wedges, hexahedra (umesh's layout: no offsets, no type
+/// array). A cell's index is its position in that order; cell fields follow it. Every cell is wound as VTK
+/// expects (positive volume): inverted cells are reordered on construction.
+struct Mesh {
+  std::vector<Vec3f> points;
+  std::vector<uint32_t> tets;     ///< 4 point indices per cell
+  std::vector<uint32_t> pyramids; ///< 5
+  std::vector<uint32_t> wedges;   ///< 6
+  std::vector<uint32_t> hexes;    ///< 8
+  std::vector<ScalarField> fields;
+
+  uint64_t skippedCells = 0;  ///< lower-dimensional cells of the file that were not kept
+  uint64_t invertedCells = 0; ///< cells whose winding was reversed on construction
+
+  uint64_t tetCount() const { return tets.size() / 4; }
+  uint64_t pyramidCount() const { return pyramids.size() / 5; }
+  uint64_t wedgeCount() const { return wedges.size() / 6; }
+  uint64_t hexCount() const { return hexes.size() / 8; }
+  uint64_t cellCount() const { return tetCount() + pyramidCount() + wedgeCount() + hexCount(); }
+
+  Box3f bounds() const;
+  /// Index into `fields`, or -1.
+  int findField(const std::string &name) const;
+};
+
+/// Groups the volume cells of `grid` by type, fixes their winding and reorders cell fields to match.
+/// Lower-dimensional cells are dropped and counted; `source` names the file in errors.
+Mesh buildMesh(UnstructuredGrid &&grid, const std::string &source);
+
+} // namespace uvr

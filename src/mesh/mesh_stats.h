@@ -1,0 +1,29 @@
+// Measures of a mesh that defaults and `uvr info` rest on.
+#pragma once
+
+#include "mesh/mesh.h"
+#include "mesh/mesh_view.h"
+
+namespace uvr {
+
+/// Volume of one cell (absolute; hexahedra, wedges and pyramids through a split into tetrahedra).
+double cellVolume(const MeshView &mesh, uint64_t cell);
+
+struct VolumeStats {
+  double min = 0.0, median = 0.0, max = 0.0;
+};
+
+VolumeStats volumeStats(const Mesh &mesh);
+
+struct ValueRange {
+  float min = 0.f, max = 0.f;
+};
+
+/// Range of a field's finite values; {0, 0} when it has none.
+ValueRange valueRange(const ScalarField &field);
+
+/// The default step s1: the edge of a cube of the median cell volume, about half a typical tet's edge, so that
+/// a ray takes about two samples per cell it crosses.
+float defaultStepSize(const VolumeStats &volumes);
+
+} // namespace uvr

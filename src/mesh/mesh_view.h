@@ -1,0 +1,46 @@
+// A plain, pointer-and-count view of a mesh and one of its fields: what the integrator reads on host and device.
+#pragma once
+
+#include "core/vec.h"
+#include "mesh/mesh.h"
+
+#include <cstdint>
+
+namespace uvr {
+
+struct MeshView {
+  const Vec3f *points = nullptr;
+  const uint32_t *tets = nullptr;
+  const uint32_t *pyramids = nullptr;
+  const uint32_t *wedges = nullptr;
+  const uint32_t *hexes = nullptr;
+  uint64_t tetCount = 0;
+  uint64_t pyramidCount = 0;
+  uint64_t wedgeCount = 0;
+  uint64_t hexCount = 0;
+  const float *values = nullptr; ///< the rendered field, per point or per cell
+  bool cellCentered = false;
+
+  UVR_HOST_DEVICE uint64_t cellCount() const { return tetCount + pyramidCount + wedgeCount + hexCount; }
+};
+
+/// A view of `mesh` whose values come from field `fieldIndex`; -1 for geometry alone.
+inline MeshView makeMeshView(const Mesh &mesh, int fieldIndex) {
+  MeshView view;
+  view.points = mesh.points.data();
+  view.tets = mesh.tets.data();
+  view.pyramids = mesh.pyramids.data();
+  view.wedges = mesh.wedges.data();
+  view.hexes = mesh.hexes.data();
+  view.tetCount = mesh.tetCount();
+  view.pyramidCount = mesh.pyramidCount();
+  view.wedgeCount = mesh.wedgeCount();
+  view.hexCount = mesh.hexCount();
+  if (fieldIndex >= 0) {
+    view.values = mesh.fields[size_t(fieldIndex)].values.data();
+    view.cellCentered = mesh.fields[size_t(fieldIndex)].centering == Centering::Cell;
+  }
+  return view;
+}
+
+} // namespace uvr

@@ -1,0 +1,74 @@
+// The host-side renderer: owns the acceleration data for one mesh and field, the transfer function and its
+// per-partition metadata, and draws frames on a backend.
+#pragma once
+
+#include "accel/bvh.h"
+#include "accel/partitions.h"
+#include "image/image.h"
+#include "mesh/mesh.h"
+#include "render/camera.h"
+#include "render/integrator.h"
+#include "render/transfer_function.h"
+
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace uvr {
+
+enum class Backend : uint8_t { Cpu };
+
+const char *modeName(RenderMode mode);
+/// Parses reference|skip|adaptive|full; throws uvr::Error otherwise.
+RenderMode parseMode(const std::string &name);
+
+struct RenderSettings {
+  IntegratorSettings integrator;
+  Vec3f background{0.f, 0.f, 0.f};
+  int width = 1024;
+  int height = 1024;
+  Backend backend = Backend::Cpu;
+};
+
+struct Frame {
+  Image image;
+  std::vector<float> opacity;            ///< accumulated opacity per pixel, row-major, top row first
+  std::vector<uint32_t> samplesPerPixel; ///< row-major, top row first
+  uint64_t samplesTotal = 0;
+  uint32_t samplesMax = 0;
+};
+
+class Renderer {
+public:
+  /// Builds the point-location hierarchy and the partitions for field `fieldIndex` of `mesh`, which must
+  /// outlive the renderer.
+  Renderer(const Mesh &mesh, int fieldIndex, uint32_t leafSize = kDefaultLeafSize);
+
+  /// Replaces the transfer function and recomputes the partitions' metadata; the mesh is not touched.
+  void setTransferFunction(TransferFunction tf);
+
+  Frame render(const Camera &camera, const RenderSettings &settings) const;
+
+  const Partitions &partitions() const { return partitions_; }
+  const Bvh &bvh() const { return bvh_; }
+  const PartitionMetadata &metadata() const { return metadata_; }
+  double buildMs() const { return buildMs_; }
+  double tfUpdateMs() const { return tfUpdateMs_; }
+
+private:
+  SceneView sceneView() const;
+
+  const Mesh &mesh_;
+  MeshView meshView_;
+  Bvh bvh_;
+  Partitions partitions_;
+  std::optional<TransferFunction> tf_;
+  PartitionMetadata metadata_;
+  double buildMs_ = 0.0;
+  double tfUpdateMs_ = 0.0;
+};
+
+/// Draws a frame with all cores: one ray per pixel, composited over `settings.background`.
+void renderCpu(const SceneView &scene, const CameraView &camera, const RenderSettings &settings, Frame &frame);
+
+} // namespace uvr
