@@ -122,7 +122,7 @@ UVR_HOST_DEVICE inline bool isoparametricWeights(const Vec3f *points, const uint
     return false;
 
   Vec3f r{1.f / 3.f, 1.f / 3.f, 0.5f}; // inside all three reference cells, away from the pyramid's apex
-  for (int iteration = 0; iteration < 12; ++iteration) {
+  for (int iteration = 0; iteration < 16; ++iteration) {
     evaluateShape(r, s);
     Vec3f residual = Vec3f{} - p;
     Vec3f dr{}, ds{}, dt{};
@@ -132,18 +132,28 @@ UVR_HOST_DEVICE inline bool isoparametricWeights(const Vec3f *points, const uint
       ds = ds + corner[i] * s.derivative[i].y;
       dt = dt + corner[i] * s.derivative[i].z;
     }
+    // Converged; also the way out at a pyramid's apex, where the Jacobian is singular.
+    if (fabsf(residual.x) + fabsf(residual.y) + fabsf(residual.z) <= 1e-6f * scale)
+      break;
     // Solve J * delta = residual by Cramer's rule; J's columns are dx/dr, dx/ds, dx/dt.
     const float det = det3(dr, ds, dt);
     if (!(det != 0.f))
       return false;
     const float inv = 1.f / det;
-    const Vec3f delta{det3(residual, ds, dt) * inv, det3(dr, residual, dt) * inv, det3(dr, ds, residual) * inv};
+    Vec3f delta{det3(residual, ds, dt) * inv, det3(dr, residual, dt) * inv, det3(dr, ds, residual) * inv};
+    // Damped: on strongly distorted cells a full step from the centre can overshoot into another root.
+    const float largest = fmaxf(fabsf(delta.x), fmaxf(fabsf(delta.y), fabsf(delta.z)));
+    if (largest > 0.5f)
+      delta = delta * (0.5f / largest);
     r = r - delta;
-    if (fabsf(delta.x) + fabsf(delta.y) + fabsf(delta.z) < 1e-6f)
-      break;
     // Far outside after a few steps: no need to converge to say no.
     if (iteration >= 3 && (fabsf(r.x - 0.5f) > 2.f || fabsf(r.y - 0.5f) > 2.f || fabsf(r.z - 0.5f) > 2.f))
       return false;
+  }
+  // At a pyramid's apex every (r, s) maps to the same point, and Newton's r and s wander off.
+  if (N == 5 && r.z >= 1.f - 1e-4f && r.z <= 1.f + kInsideTolerance) {
+    r.x = fminf(fmaxf(r.x, 0.f), 1.f);
+    r.y = fminf(fmaxf(r.y, 0.f), 1.f);
   }
   if (!insideReference(r, N))
     return false;

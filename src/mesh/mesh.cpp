@@ -111,6 +111,13 @@ void reverseWinding(CellType type, uint32_t *v) {
 
 } // namespace
 
+bool orientCell(CellType type, uint32_t *v, const std::vector<Vec3f> &points) {
+  if (windingSign(type, v, points) >= 0.f)
+    return false;
+  reverseWinding(type, v);
+  return true;
+}
+
 int vertexCount(uint8_t vtkType) {
   CellKind kind;
   return volumeKind(vtkType, kind) ? kind.corners : 0;
@@ -198,10 +205,8 @@ Mesh buildMesh(UnstructuredGrid &&grid, const std::string &source) {
       std::swap(v[2], v[3]);
       std::swap(v[6], v[7]);
     }
-    if (windingSign(kind.type, v, grid.points) < 0.f) {
-      reverseWinding(kind.type, v);
+    if (orientCell(kind.type, v, grid.points))
       ++mesh.invertedCells;
-    }
     cursor[s] += kind.corners;
     fileToMesh[c] = next[s]++;
   }

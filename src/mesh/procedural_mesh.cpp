@@ -1,0 +1,97 @@
+#include "mesh/procedural_mesh.h"
+
+#include <algorithm>
+#include <random>
+
+namespace uvr {
+
+namespace {
+
+/// Appends a cell, wound as VTK expects whatever the order given.
+void addCell(UnstructuredGrid &grid, CellType type, std::initializer_list<uint32_t> ids) {
+  uint32_t v[8];
+  std::copy(ids.begin(), ids.end(), v);
+  orientCell(type, v, grid.points);
+  for (size_t i = 0; i < ids.size(); ++i)
+    grid.connectivity.push_back(v[i]);
+  grid.offsets.push_back(int64_t(grid.connectivity.size()));
+  grid.types.push_back(uint8_t(type));
+}
+
+} // namespace
+
+UnstructuredGrid makeBoxGrid(CellType type, int n, const Box3f &box, const std::function<float(Vec3f)> &field,
+                             float jitter, unsigned seed) {
+  UnstructuredGrid grid;
+  grid.offsets.push_back(0);
+  const int m = n + 1;
+  const Vec3f step = box.size() / float(n);
+  std::mt19937 random(seed);
+  std::uniform_real_distribution<float> offset(-jitter, jitter);
+  auto index = [m](int i, int j, int k) { return uint32_t((k * m + j) * m + i); };
+  for (int k = 0; k < m; ++k)
+    for (int j = 0; j < m; ++j)
+      for (int i = 0; i < m; ++i) {
+        Vec3f p = box.lower + Vec3f{float(i) * step.x, float(j) * step.y, float(k) * step.z};
+        const bool interior = i > 0 && j > 0 && k > 0 && i < n && j < n && k < n;
+        if (interior && jitter > 0.f)
+          p = p + Vec3f{offset(random) * step.x, offset(random) * step.y, offset(random) * step.z};
+        grid.points.push_back(p);
+      }
+
+  for (int k = 0; k < n; ++k)
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i) {
+        // Corner c of the cube: bit 0 = +x, bit 1 = +y, bit 2 = +z.
+        uint32_t c[8];
+        for (int b = 0; b < 8; ++b)
+          c[b] = index(i + (b & 1), j + ((b >> 1) & 1), k + ((b >> 2) & 1));
+        switch (type) {
+        case CellType::Tetra: {
+          // Kuhn's six tetrahedra along the main diagonal; neighbouring cubes cut their shared faces alike.
+          const int paths[6][2] = {{1, 3}, {1, 5}, {2, 3}, {2, 6}, {4, 5}, {4, 6}};
+          for (const auto &path : paths)
+            addCell(grid, type, {c[0], c[path[0]], c[path[1]], c[7]});
+          break;
+        }
+        case CellType::Hexahedron:
+          addCell(grid, type, {c[0], c[1], c[3], c[2], c[4], c[5], c[7], c[6]});
+          break;
+        case CellType::Wedge:
+          addCell(grid, type, {c[0], c[3], c[1], c[4], c[7], c[5]});
+          addCell(grid, type, {c[0], c[2], c[3], c[4], c[6], c[7]});
+          break;
+        case CellType::Pyramid: {
+          Vec3f centre{};
+          for (uint32_t id : c)
+            centre = centre + grid.points[id] * 0.125f;
+          const auto apex = uint32_t(grid.points.size());
+          grid.points.push_back(centre);
+          // Each face of the cube is the base of one pyramid.
+          addCell(grid, type, {c[0], c[2], c[3], c[1], apex}); // -z
+          addCell(grid, type, {c[4], c[5], c[7], c[6], apex}); // +z
+          addCell(grid, type, {c[0], c[1], c[5], c[4], apex}); // -y
+          addCell(grid, type, {c[2], c[6], c[7], c[3], apex}); // +y
+          addCell(grid, type, {c[0], c[4], c[6], c[2], apex}); // -x
+          addCell(grid, type, {c[1], c[3], c[7], c[5], apex}); // +x
+          break;
+        }
+        }
+      }
+
+  ScalarField pointField{"f", Centering::Point, {}};
+  for (const Vec3f &p : grid.points)
+    pointField.values.push_back(field(p));
+  ScalarField cellField{"f_cell", Centering::Cell, {}};
+  for (size_t cell = 0; cell + 1 < grid.offsets.size(); ++cell) {
+    Vec3f centroid{};
+    const auto first = size_t(grid.offsets[cell]), last = size_t(grid.offsets[cell + 1]);
+    for (size_t v = first; v < last; ++v)
+      centroid = centroid + grid.points[size_t(grid.connectivity[v])];
+    cellField.values.push_back(field(centroid / float(last - first)));
+  }
+  grid.fields = {std::move(pointField), std::move(cellField)};
+  return grid;
+}
+
+} // namespace uvr

@@ -1,0 +1,144 @@
+// Point location and interpolation inside single cells, and mesh construction.
+#include "core/error.h"
+#include "mesh/cell.h"
+#include "mesh/mesh_stats.h"
+#include "mesh/procedural_mesh.h"
+
+#include <gtest/gtest.h>
+
+#include <random>
+
+using namespace uvr;
+
+namespace {
+
+float linear(Vec3f p) { return 0.5f + 2.f * p.x - 3.f * p.y + 1.5f * p.z; }
+
+const Box3f kUnitBox{{0.f, 0.f, 0.f}, {1.f, 1.f, 1.f}};
+
+/// A jittered box mesh of one cell type with the linear field.
+Mesh jitteredMesh(CellType type) { return buildMesh(makeBoxGrid(type, 3, kUnitBox, linear, 0.2f, 7), "test"); }
+
+class EveryCellType : public ::testing::TestWithParam<CellType> {};
+
+} // namespace
+
+TEST(TetWeights, LinearFieldIsExactInside) {
+  const Vec3f a{0.1f, 0.2f, 0.3f}, b{1.3f, 0.1f, 0.2f}, c{0.4f, 1.2f, 0.1f}, d{0.5f, 0.4f, 1.1f};
+  std::mt19937 random(3);
+  std::uniform_real_distribution<float> u(0.f, 1.f);
+  for (int i = 0; i < 1000; ++i) {
+    float l[4] = {u(random), u(random), u(random), u(random)};
+    const float sum = l[0] + l[1] + l[2] + l[3];
+    const Vec3f p = (a * l[0] + b * l[1] + c * l[2] + d * l[3]) / sum;
+    float w[4];
+    ASSERT_TRUE(tetWeights(a, b, c, d, p, w));
+    const float value = w[0] * linear(a) + w[1] * linear(b) + w[2] * linear(c) + w[3] * linear(d);
+    EXPECT_NEAR(value, linear(p), 1e-5f);
+  }
+  float w[4];
+  EXPECT_FALSE(tetWeights(a, b, c, d, {2.f, 2.f, 2.f}, w));
+  EXPECT_TRUE(tetWeights(a, b, c, d, a, w));
+  EXPECT_NEAR(w[0], 1.f, 1e-6f);
+}
+
+TEST_P(EveryCellType, ShapeFunctionsReproduceVertexValues) {
+  const Mesh mesh = jitteredMesh(GetParam());
+  const MeshView view = makeMeshView(mesh, mesh.findField("f"));
+  for (uint64_t cell = 0; cell < view.cellCount(); ++cell)
+    forEachCellVertex(view, cell, [&](uint32_t v) {
+      float value;
+      ASSERT_TRUE(sampleCell(view, cell, mesh.points[v], value)) << "cell " << cell << " vertex " << v;
+      EXPECT_NEAR(value, view.values[v], 1e-4f);
+    });
+}
+
+TEST_P(EveryCellType, ShapeFunctionsReproduceLinearFields) {
+  const Mesh mesh = jitteredMesh(GetParam());
+  const MeshView view = makeMeshView(mesh, mesh.findField("f"));
+  std::mt19937 random(11);
+  std::uniform_real_distribution<float> u(0.02f, 0.98f);
+  int found = 0;
+  for (int i = 0; i < 2000; ++i) {
+    const Vec3f p{u(random), u(random), u(random)};
+    int holders = 0;
+    for (uint64_t cell = 0; cell < view.cellCount(); ++cell) {
+      float value;
+      if (sampleCell(view, cell, p, value)) {
+        ++holders;
+        EXPECT_NEAR(value, linear(p), 2e-4f) << "cell " << cell;
+      }
+    }
+    // The cells tile the box: every point lies in one cell (or on a shared face, in a few).
+    EXPECT_GE(holders, 1);
+    found += holders;
+  }
+  EXPECT_LT(found, 2000 * 2);
+}
+
+TEST_P(EveryCellType, CellDataIsTheCellsValue) {
+  const Mesh mesh = jitteredMesh(GetParam());
+  const MeshView view = makeMeshView(mesh, mesh.findField("f_cell"));
+  for (uint64_t cell = 0; cell < view.cellCount(); ++cell) {
+    Vec3f centroid{};
+    int n = 0;
+    forEachCellVertex(view, cell, [&](uint32_t v) { centroid = centroid + mesh.points[v], ++n; });
+    float value;
+    ASSERT_TRUE(sampleCell(view, cell, centroid / float(n), value));
+    EXPECT_EQ(value, view.values[cell]);
+  }
+}
+
+TEST_P(EveryCellType, VolumesSumToTheBox) {
+  const Mesh mesh = jitteredMesh(GetParam());
+  const MeshView view = makeMeshView(mesh, -1);
+  double total = 0.0;
+  for (uint64_t cell = 0; cell < view.cellCount(); ++cell)
+    total += cellVolume(view, cell);
+  EXPECT_NEAR(total, 1.0, 1e-4);
+  EXPECT_EQ(mesh.invertedCells, 0u);
+}
+
+INSTANTIATE_TEST_SUITE_P(Cells, EveryCellType,
+                         ::testing::Values(CellType::Tetra, CellType::Hexahedron, CellType::Wedge,
+                                           CellType::Pyramid),
+                         [](const auto &info) {
+                           switch (info.param) {
+                           case CellType::Tetra:
+                             return std::string("Tetra");
+                           case CellType::Hexahedron:
+                             return std::string("Hexahedron");
+                           case CellType::Wedge:
+                             return std::string("Wedge");
+                           default:
+                             return std::string("Pyramid");
+                           }
+                         });
+
+TEST(BuildMesh, SkipsLowerDimensionalCellsAndReordersCellData) {
+  UnstructuredGrid grid;
+  grid.points = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {1, 1, 1}};
+  grid.offsets = {0, 3, 8, 12};
+  grid.connectivity = {0, 1, 2, /*pyramid*/ 0, 1, 4, 2, 3, /*tet*/ 0, 1, 2, 3};
+  grid.types = {5, 14, 10};
+  grid.fields = {{"c", Centering::Cell, {7.f, 8.f, 9.f}}};
+  const Mesh mesh = buildMesh(std::move(grid), "test");
+  EXPECT_EQ(mesh.skippedCells, 1u);
+  EXPECT_EQ(mesh.tetCount(), 1u);
+  EXPECT_EQ(mesh.pyramidCount(), 1u);
+  // Cells are numbered tets first.
+  EXPECT_EQ(mesh.fields[0].values[0], 9.f);
+  EXPECT_EQ(mesh.fields[0].values[1], 8.f);
+}
+
+TEST(BuildMesh, RejectsBadIndicesAndTypes) {
+  UnstructuredGrid grid;
+  grid.points = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  grid.offsets = {0, 4};
+  grid.connectivity = {0, 1, 2, 9};
+  grid.types = {10};
+  EXPECT_THROW(buildMesh(UnstructuredGrid(grid), "bad.vtu"), Error);
+  grid.connectivity = {0, 1, 2, 3};
+  grid.types = {42};
+  EXPECT_THROW(buildMesh(UnstructuredGrid(grid), "bad.vtu"), Error);
+}

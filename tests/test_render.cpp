@@ -1,0 +1,187 @@
+// Whole-frame properties of the integrator: analytic transmittance, equivalence of the modes, no cracks at
+// partition boundaries, independence of cell winding.
+#include "mesh/procedural_mesh.h"
+#include "render/renderer.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+using namespace uvr;
+
+namespace {
+
+const Box3f kBox{{-1.f, -1.f, -1.f}, {1.f, 1.f, 1.f}};
+
+/// Uniform white with opacity `alpha` per unit distance for every value in [0, 1].
+ColorMap constantMap(float alpha) {
+  ColorMap map;
+  map.rgbPoints = {0.f, 1.f, 1.f, 1.f, 1.f, 1.f, 1.f, 1.f};
+  map.opacityPoints = {0.f, alpha, 0.5f, 0.f, 1.f, alpha, 0.5f, 0.f};
+  return map;
+}
+
+/// Opacity rising over [0.4, 0.6] and colour varying throughout: some partitions transparent, some not.
+ColorMap rampMap() {
+  ColorMap map;
+  map.rgbPoints = {0.f, 0.f, 0.f, 1.f, 0.5f, 0.f, 1.f, 0.f, 1.f, 1.f, 0.f, 0.f};
+  map.opacityPoints = {0.f, 0.f, 0.5f, 0.f, 0.4f, 0.f, 0.5f, 0.f, 0.6f, 0.8f, 0.5f, 0.f, 1.f, 0.9f, 0.5f, 0.f};
+  return map;
+}
+
+float radial(Vec3f p) { return 1.f - 0.5f * length(p); }
+
+Camera obliqueCamera() {
+  Camera camera;
+  camera.eye = {2.2f, 1.7f, 3.1f};
+  camera.at = {0.05f, -0.03f, 0.02f};
+  camera.fovy = 40.f;
+  return camera;
+}
+
+RenderSettings settingsFor(RenderMode mode, float s1, float s2 = 0.f) {
+  RenderSettings settings;
+  settings.width = settings.height = 64;
+  settings.integrator.mode = mode;
+  settings.integrator.s1 = s1;
+  settings.integrator.s2 = s2 > 0.f ? s2 : s1;
+  settings.integrator.unit = 0.1f;
+  return settings;
+}
+
+/// Largest difference in accumulated opacity and in any 8-bit channel.
+void expectSameFrame(const Frame &a, const Frame &b, float opacityTolerance, int byteTolerance) {
+  ASSERT_EQ(a.opacity.size(), b.opacity.size());
+  float worstOpacity = 0.f;
+  for (size_t i = 0; i < a.opacity.size(); ++i)
+    worstOpacity = std::max(worstOpacity, std::fabs(a.opacity[i] - b.opacity[i]));
+  int worstByte = 0;
+  for (size_t i = 0; i < a.image.rgb.size(); ++i)
+    worstByte = std::max(worstByte, std::abs(int(a.image.rgb[i]) - int(b.image.rgb[i])));
+  EXPECT_LE(worstOpacity, opacityTolerance);
+  EXPECT_LE(worstByte, byteTolerance);
+}
+
+} // namespace
+
+TEST(Integrator, ConstantFieldGivesExponentialTransmittance) {
+  const Mesh mesh = buildMesh(makeBoxGrid(CellType::Tetra, 8, kBox, [](Vec3f) { return 0.5f; }), "box");
+  Renderer renderer(mesh, mesh.findField("f"), 64);
+  const float alphaPerUnit = 0.3f;
+  renderer.setTransferFunction(TransferFunction(constantMap(alphaPerUnit), 0.f, 1.f));
+  const Camera camera = obliqueCamera();
+  for (RenderMode mode : {RenderMode::Reference, RenderMode::Skip, RenderMode::Full}) {
+    RenderSettings settings = settingsFor(mode, 0.01f, 0.04f);
+    settings.integrator.terminationOpacity = 2.f; // never terminate early
+    const Frame frame = renderer.render(camera, settings);
+    const CameraView view = makeCameraView(camera, settings.width, settings.height);
+    const float kappa = -std::log(1.f - alphaPerUnit) / settings.integrator.unit;
+    int inside = 0;
+    for (int y = 0; y < settings.height; ++y)
+      for (int x = 0; x < settings.width; ++x) {
+        const Ray ray = view.ray(x, y);
+        float t0, t1;
+        const float length = intersectBox(ray, kBox, 0.f, INFINITY, t0, t1) ? t1 - t0 : 0.f;
+        const float transmittance = 1.f - frame.opacity[size_t(y * settings.width + x)];
+        // Samples stand for steps of length s: the count may differ from length / s by one sample.
+        const float step = mode == RenderMode::Full ? 0.04f : 0.01f;
+        const float tolerance = std::exp(-kappa * std::max(length - step, 0.f)) - std::exp(-kappa * length);
+        EXPECT_NEAR(transmittance, std::exp(-kappa * length), tolerance + 1e-5f) << "pixel " << x << "," << y;
+        inside += length > 0.f;
+      }
+    EXPECT_GT(inside, 64 * 64 / 4);
+  }
+}
+
+TEST(Integrator, SkippingChangesNoContributingSample) {
+  const Mesh mesh = buildMesh(makeBoxGrid(CellType::Tetra, 12, kBox, radial, 0.25f), "box");
+  Renderer renderer(mesh, mesh.findField("f"), 32);
+  renderer.setTransferFunction(TransferFunction(rampMap(), 0.f, 1.f));
+  ASSERT_GT(renderer.metadata().transparentCount, 0u);
+  ASSERT_LT(renderer.metadata().transparentCount, renderer.partitions().count());
+  const float s1 = 0.013f;
+  const Frame reference = renderer.render(obliqueCamera(), settingsFor(RenderMode::Reference, s1));
+  const Frame skip = renderer.render(obliqueCamera(), settingsFor(RenderMode::Skip, s1));
+  const Frame adaptive = renderer.render(obliqueCamera(), settingsFor(RenderMode::Adaptive, s1));
+  const Frame full = renderer.render(obliqueCamera(), settingsFor(RenderMode::Full, s1));
+  expectSameFrame(reference, skip, 1e-5f, 1);
+  expectSameFrame(skip, adaptive, 1e-5f, 1);
+  expectSameFrame(skip, full, 1e-5f, 1);
+  EXPECT_LT(skip.samplesTotal, reference.samplesTotal);
+  EXPECT_EQ(full.samplesTotal, skip.samplesTotal);
+
+  // With s2 > s1 adaptive sampling takes fewer samples and stays close.
+  const Frame coarse = renderer.render(obliqueCamera(), settingsFor(RenderMode::Full, s1, 4.f * s1));
+  EXPECT_LT(coarse.samplesTotal, skip.samplesTotal);
+  expectSameFrame(skip, coarse, 0.05f, 16);
+}
+
+TEST(Integrator, NoCracksAtPartitionBoundaries) {
+  for (CellType type : {CellType::Tetra, CellType::Hexahedron}) {
+    const Mesh mesh = buildMesh(makeBoxGrid(type, 10, kBox, [](Vec3f) { return 0.5f; }), "box");
+    Renderer one(mesh, mesh.findField("f"), 1u << 30);
+    Renderer many(mesh, mesh.findField("f"), 8);
+    ASSERT_EQ(one.partitions().count(), 1u);
+    ASSERT_GT(many.partitions().count(), 100u);
+    one.setTransferFunction(TransferFunction(constantMap(0.2f), 0.f, 1.f));
+    many.setTransferFunction(TransferFunction(constantMap(0.2f), 0.f, 1.f));
+
+    // Put the eye on the root's split plane, and on a second split plane below it, so that the middle column
+    // and middle row of an odd-sized image run exactly along planes, through edges and corners of partitions.
+    const KdNode &root = many.partitions().nodes[0];
+    ASSERT_NE(root.axis, KdNode::kLeaf);
+    const KdNode &below = many.partitions().nodes[root.child];
+    const int first = int(root.axis);
+    const bool secondSplit = below.axis != KdNode::kLeaf && below.axis != root.axis;
+    const int second = secondSplit ? int(below.axis) : (first + 1) % 3;
+    const int depth = 3 - first - second;
+    Camera camera;
+    camera.eye[first] = root.split;
+    if (secondSplit)
+      camera.eye[second] = below.split;
+    camera.eye[depth] = 4.f;
+    camera.at = camera.eye;
+    camera.at[depth] = 0.f;
+    camera.up = {0.f, 0.f, 0.f};
+    camera.up[(depth + 1) % 3] = 1.f;
+    for (RenderMode mode : {RenderMode::Skip, RenderMode::Full}) {
+      RenderSettings settings = settingsFor(mode, 0.02f);
+      settings.width = settings.height = 65;
+      const Frame a = one.render(camera, settings);
+      const Frame b = many.render(camera, settings);
+      expectSameFrame(a, b, 1e-5f, 0);
+    }
+  }
+}
+
+TEST(Integrator, WindingDoesNotChangeTheImage) {
+  const UnstructuredGrid grid = makeBoxGrid(CellType::Hexahedron, 6, kBox, radial, 0.2f);
+  auto reversed = [&](bool every) {
+    UnstructuredGrid copy = grid;
+    for (size_t c = 0; c + 1 < copy.offsets.size(); ++c) {
+      if (!every && c % 2)
+        continue;
+      int64_t *v = &copy.connectivity[size_t(copy.offsets[c])];
+      for (int i = 0; i < 4; ++i)
+        std::swap(v[i], v[i + 4]);
+    }
+    return copy;
+  };
+  const Mesh correct = buildMesh(UnstructuredGrid(grid), "correct");
+  const Mesh inverted = buildMesh(reversed(true), "inverted");
+  const Mesh mixed = buildMesh(reversed(false), "mixed");
+  EXPECT_EQ(correct.invertedCells, 0u);
+  EXPECT_EQ(inverted.invertedCells, correct.cellCount());
+  EXPECT_EQ(mixed.invertedCells, (correct.cellCount() + 1) / 2);
+
+  Frame frames[3];
+  const Mesh *meshes[3] = {&correct, &inverted, &mixed};
+  for (int i = 0; i < 3; ++i) {
+    Renderer renderer(*meshes[i], meshes[i]->findField("f"), 16);
+    renderer.setTransferFunction(TransferFunction(rampMap(), 0.f, 1.f));
+    frames[i] = renderer.render(obliqueCamera(), settingsFor(RenderMode::Full, 0.02f, 0.08f));
+  }
+  EXPECT_GT(frames[0].samplesTotal, 0u);
+  expectSameFrame(frames[0], frames[1], 0.f, 0);
+  expectSameFrame(frames[0], frames[2], 0.f, 0);
+}
