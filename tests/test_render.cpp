@@ -21,11 +21,11 @@ ColorMap constantMap(float alpha) {
   return map;
 }
 
-/// Opacity rising over [0.4, 0.6] and colour varying throughout: some partitions transparent, some not.
+/// Opacity rising over [0.55, 0.7] and colour varying throughout: some partitions transparent, some not.
 ColorMap rampMap() {
   ColorMap map;
   map.rgbPoints = {0.f, 0.f, 0.f, 1.f, 0.5f, 0.f, 1.f, 0.f, 1.f, 1.f, 0.f, 0.f};
-  map.opacityPoints = {0.f, 0.f, 0.5f, 0.f, 0.4f, 0.f, 0.5f, 0.f, 0.6f, 0.8f, 0.5f, 0.f, 1.f, 0.9f, 0.5f, 0.f};
+  map.opacityPoints = {0.f, 0.f, 0.5f, 0.f, 0.55f, 0.f, 0.5f, 0.f, 0.7f, 0.8f, 0.5f, 0.f, 1.f, 0.9f, 0.5f, 0.f};
   return map;
 }
 

@@ -5,10 +5,9 @@
 #include "mesh/cell.h"
 
 #include <tbb/parallel_for.h>
-#include <tbb/parallel_invoke.h>
+#include <tbb/enumerable_thread_specific.h>
 
 #include <algorithm>
-#include <memory>
 
 namespace uvr {
 
@@ -19,110 +18,85 @@ struct CellInfo {
   float valueMin, valueMax;
 };
 
-struct BuildNode {
-  int axis = KdNode::kLeaf;
-  float split = 0.f;
-  std::unique_ptr<BuildNode> below, above;
-  // Leaf only.
-  Box3f shrunk;
+/// What a leaf gathers from the cells whose boxes touch it.
+struct LeafAccumulator {
+  Box3f cells;
   float valueMin = INFINITY, valueMax = -INFINITY;
-  uint64_t cellCount = 0;
+  uint64_t count = 0;
+
+  void add(const CellInfo &cell) {
+    cells.extend(cell.bounds);
+    valueMin = minf(valueMin, cell.valueMin);
+    valueMax = maxf(valueMax, cell.valueMax);
+    ++count;
+  }
+  void merge(const LeafAccumulator &other) {
+    cells.extend(other.cells);
+    valueMin = minf(valueMin, other.valueMin);
+    valueMax = maxf(valueMax, other.valueMax);
+    count += other.count;
+  }
 };
 
-class Builder {
+/// Splits `ids` (cells by centroid) in place at the median centroid along the axis where the centroids spread
+/// most (paper §2.1), down to `leafSize` cells. Nodes are appended children-adjacent, as KdNode expects.
+class TreeBuilder {
 public:
-  Builder(const std::vector<CellInfo> &cells, uint32_t leafSize, Progress &progress)
-      : cells_(cells), leafSize_(leafSize), progress_(progress) {}
+  TreeBuilder(const std::vector<Vec3f> &centroids, uint32_t leafSize, Partitions &parts)
+      : centroids_(centroids), leafSize_(leafSize), parts_(parts) {}
 
-  /// `ids` are the cells whose boxes touch `box`, the node's cell of space.
-  std::unique_ptr<BuildNode> build(const Box3f &box, std::vector<uint32_t> ids, int depth) {
-    auto node = std::make_unique<BuildNode>();
-    int axis = -1;
-    float split = 0.f;
-    if (ids.size() > leafSize_ && depth < 48)
-      chooseSplit(box, ids, axis, split);
-
-    std::vector<uint32_t> below, above;
-    if (axis >= 0) {
-      for (uint32_t id : ids) {
-        if (cells_[id].bounds.lower[axis] <= split)
-          below.push_back(id);
-        if (cells_[id].bounds.upper[axis] >= split)
-          above.push_back(id);
+  void build(uint32_t node, const Box3f &box, uint32_t *first, uint32_t *last, int depth) {
+    const size_t count = size_t(last - first);
+    if (count > leafSize_ && depth < 48) {
+      Box3f spread;
+      for (const uint32_t *id = first; id < last; ++id)
+        spread.extend(centroids_[*id]);
+      const Vec3f extent = spread.size();
+      const int axis = extent.x >= extent.y && extent.x >= extent.z ? 0 : (extent.y >= extent.z ? 1 : 2);
+      uint32_t *middle = first + count / 2;
+      std::nth_element(first, middle, last,
+                       [&](uint32_t a, uint32_t b) { return centroids_[a][axis] < centroids_[b][axis]; });
+      const float split = centroids_[*middle][axis];
+      // A split on the box's face leaves one side empty: stop there.
+      if (split > box.lower[axis] && split < box.upper[axis]) {
+        const auto child = uint32_t(parts_.nodes.size());
+        parts_.nodes[node] = {split, uint32_t(axis), child};
+        parts_.nodes.resize(parts_.nodes.size() + 2);
+        Box3f below = box, above = box;
+        below.upper[axis] = split;
+        above.lower[axis] = split;
+        // Cells with centroid at the split go below or above arbitrarily: their boxes are assigned later.
+        build(child, below, first, middle, depth + 1);
+        build(child + 1, above, middle, last, depth + 1);
+        return;
       }
-      // A split that sends every cell to both sides only duplicates work.
-      if (below.size() == ids.size() && above.size() == ids.size())
-        axis = -1;
     }
-    if (axis < 0) {
-      makeLeaf(*node, box, ids);
-      return node;
-    }
-
-    ids = {};
-    Box3f boxBelow = box, boxAbove = box;
-    boxBelow.upper[axis] = split;
-    boxAbove.lower[axis] = split;
-    node->axis = axis;
-    node->split = split;
-    auto buildBelow = [&] { node->below = build(boxBelow, std::move(below), depth + 1); };
-    auto buildAbove = [&] { node->above = build(boxAbove, std::move(above), depth + 1); };
-    if (below.size() + above.size() > 65536)
-      tbb::parallel_invoke(buildBelow, buildAbove);
-    else
-      buildBelow(), buildAbove();
-    return node;
+    parts_.nodes[node] = {0.f, KdNode::kLeaf, uint32_t(parts_.bounds.size())};
+    parts_.bounds.push_back(box); // the leaf's cell of space, shrunk once its cells are known
   }
 
 private:
-  /// Median of the cell centroids along the axis where they spread most (paper §2.1).
-  void chooseSplit(const Box3f &box, const std::vector<uint32_t> &ids, int &axis, float &split) const {
-    Box3f centroids;
-    for (uint32_t id : ids)
-      centroids.extend(cells_[id].bounds.center());
-    const Vec3f extent = centroids.size();
-    axis = extent.x >= extent.y && extent.x >= extent.z ? 0 : (extent.y >= extent.z ? 1 : 2);
-    std::vector<float> keys(ids.size());
-    for (size_t i = 0; i < ids.size(); ++i)
-      keys[i] = cells_[ids[i]].bounds.center()[axis];
-    auto middle = keys.begin() + std::ptrdiff_t(keys.size() / 2);
-    std::nth_element(keys.begin(), middle, keys.end());
-    split = *middle;
-    if (!(split > box.lower[axis] && split < box.upper[axis]))
-      axis = -1;
-  }
-
-  void makeLeaf(BuildNode &node, const Box3f &box, const std::vector<uint32_t> &ids) {
-    Box3f cellsBox;
-    for (uint32_t id : ids) {
-      cellsBox.extend(cells_[id].bounds);
-      node.valueMin = std::min(node.valueMin, cells_[id].valueMin);
-      node.valueMax = std::max(node.valueMax, cells_[id].valueMax);
-    }
-    node.shrunk = intersection(cellsBox, box); // paper §2.2
-    node.cellCount = ids.size();
-    progress_.advance(ids.size());
-  }
-
-  const std::vector<CellInfo> &cells_;
+  const std::vector<Vec3f> &centroids_;
   uint32_t leafSize_;
-  Progress &progress_;
+  Partitions &parts_;
 };
 
-void flatten(BuildNode &node, uint32_t index, Partitions &parts) {
-  if (node.axis == int(KdNode::kLeaf)) {
-    parts.nodes[index] = {0.f, KdNode::kLeaf, uint32_t(parts.bounds.size())};
-    parts.bounds.push_back(node.shrunk);
-    parts.valueMin.push_back(node.valueMin);
-    parts.valueMax.push_back(node.valueMax);
-    parts.cellCounts.push_back(node.cellCount);
-    return;
+/// Adds `cell` to every leaf its box touches (a cell straddling leaves is listed in each, paper §2.1).
+void addToLeaves(const Partitions &parts, const CellInfo &cell, std::vector<LeafAccumulator> &leaves) {
+  uint32_t stack[64];
+  int top = 0;
+  stack[top++] = 0;
+  while (top > 0) {
+    const KdNode &node = parts.nodes[stack[--top]];
+    if (node.axis == KdNode::kLeaf) {
+      leaves[node.child].add(cell);
+      continue;
+    }
+    if (cell.bounds.lower[int(node.axis)] <= node.split && top < 64)
+      stack[top++] = node.child;
+    if (cell.bounds.upper[int(node.axis)] >= node.split && top < 64)
+      stack[top++] = node.child + 1;
   }
-  const auto child = uint32_t(parts.nodes.size());
-  parts.nodes[index] = {node.split, uint32_t(node.axis), child};
-  parts.nodes.resize(parts.nodes.size() + 2);
-  flatten(*node.below, child, parts);
-  flatten(*node.above, child + 1, parts);
 }
 
 } // namespace
@@ -164,20 +138,47 @@ Partitions buildPartitions(const MeshView &mesh, uint32_t leafSize) {
   root.lower = root.lower - Vec3f{pad, pad, pad};
   root.upper = root.upper + Vec3f{pad, pad, pad};
 
-  std::vector<uint32_t> ids(cellCount);
-  for (uint64_t c = 0; c < cellCount; ++c)
-    ids[c] = uint32_t(c);
-  Builder builder(cells, leafSize, progress);
-  std::unique_ptr<BuildNode> tree = builder.build(root, std::move(ids), 0);
-
   Partitions parts;
   parts.rootBounds = root;
-  parts.nodes.resize(1);
-  flatten(*tree, 0, parts);
-  // Shrunk boxes get the same padding, clipped to their leaf by the leaf's own interval at render time.
-  for (Box3f &box : parts.bounds) {
-    box.lower = box.lower - Vec3f{pad, pad, pad};
-    box.upper = box.upper + Vec3f{pad, pad, pad};
+  {
+    std::vector<Vec3f> centroids(cellCount);
+    std::vector<uint32_t> ids(cellCount);
+    for (uint64_t c = 0; c < cellCount; ++c) {
+      centroids[c] = cells[c].bounds.center();
+      ids[c] = uint32_t(c);
+    }
+    parts.nodes.resize(1);
+    TreeBuilder(centroids, leafSize, parts).build(0, root, ids.data(), ids.data() + cellCount, 0);
+  }
+
+  // Each thread gathers into its own accumulators, merged afterwards: no atomics on the hot path.
+  const uint32_t leafCount = parts.count();
+  tbb::enumerable_thread_specific<std::vector<LeafAccumulator>> perThread(
+      [&] { return std::vector<LeafAccumulator>(leafCount); });
+  tbb::parallel_for(tbb::blocked_range<uint64_t>(0, cellCount), [&](const tbb::blocked_range<uint64_t> &range) {
+    std::vector<LeafAccumulator> &leaves = perThread.local();
+    for (uint64_t c = range.begin(); c < range.end(); ++c)
+      addToLeaves(parts, cells[c], leaves);
+    progress.advance(range.size());
+  });
+  std::vector<LeafAccumulator> leaves(leafCount);
+  for (const std::vector<LeafAccumulator> &local : perThread)
+    for (uint32_t i = 0; i < leafCount; ++i)
+      leaves[i].merge(local[i]);
+
+  parts.valueMin.resize(leafCount);
+  parts.valueMax.resize(leafCount);
+  parts.cellCounts.resize(leafCount);
+  for (uint32_t i = 0; i < leafCount; ++i) {
+    // Shrunk to the cells it holds, within the leaf (paper §2.2); padded as the root is, since the leaf's own
+    // t-interval clips it at render time.
+    Box3f shrunk = intersection(leaves[i].cells, parts.bounds[i]);
+    shrunk.lower = shrunk.lower - Vec3f{pad, pad, pad};
+    shrunk.upper = shrunk.upper + Vec3f{pad, pad, pad};
+    parts.bounds[i] = shrunk;
+    parts.valueMin[i] = leaves[i].valueMin;
+    parts.valueMax[i] = leaves[i].valueMax;
+    parts.cellCounts[i] = leaves[i].count;
   }
   progress.finish();
   return parts;

@@ -113,7 +113,7 @@ UVR_HOST_DEVICE inline bool isoparametricWeights(const Vec3f *points, const uint
     upper = vmax(upper, corner[i]);
   }
   const Vec3f extent = upper - lower;
-  const float scale = fmaxf(extent.x, fmaxf(extent.y, extent.z));
+  const float scale = maxf(extent.x, maxf(extent.y, extent.z));
   if (!(scale > 0.f))
     return false;
   const float slack = scale * kInsideTolerance;
@@ -142,7 +142,7 @@ UVR_HOST_DEVICE inline bool isoparametricWeights(const Vec3f *points, const uint
     const float inv = 1.f / det;
     Vec3f delta{det3(residual, ds, dt) * inv, det3(dr, residual, dt) * inv, det3(dr, ds, residual) * inv};
     // Damped: on strongly distorted cells a full step from the centre can overshoot into another root.
-    const float largest = fmaxf(fabsf(delta.x), fmaxf(fabsf(delta.y), fabsf(delta.z)));
+    const float largest = maxf(fabsf(delta.x), maxf(fabsf(delta.y), fabsf(delta.z)));
     if (largest > 0.5f)
       delta = delta * (0.5f / largest);
     r = r - delta;
@@ -152,8 +152,8 @@ UVR_HOST_DEVICE inline bool isoparametricWeights(const Vec3f *points, const uint
   }
   // At a pyramid's apex every (r, s) maps to the same point, and Newton's r and s wander off.
   if (N == 5 && r.z >= 1.f - 1e-4f && r.z <= 1.f + kInsideTolerance) {
-    r.x = fminf(fmaxf(r.x, 0.f), 1.f);
-    r.y = fminf(fmaxf(r.y, 0.f), 1.f);
+    r.x = clampf(r.x, 0.f, 1.f);
+    r.y = clampf(r.y, 0.f, 1.f);
   }
   if (!insideReference(r, N))
     return false;

@@ -84,7 +84,7 @@ UVR_HOST_DEVICE inline RayResult integrateRay(const SceneView &scene, const Inte
       if (c.w <= 0.f)
         continue;
       // Opacity per unit distance, corrected to this step (paper §2.4, DESIGN §5).
-      const float alpha = 1.f - powf(fmaxf(1.f - c.w, 0.f), exponent);
+      const float alpha = 1.f - powf(maxf(1.f - c.w, 0.f), exponent);
       const float weight = (1.f - result.color.w) * alpha;
       result.color.x += weight * c.x;
       result.color.y += weight * c.y;

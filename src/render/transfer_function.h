@@ -21,7 +21,7 @@ struct TransferFunctionView {
   UVR_HOST_DEVICE Vec4f sample(float value) const {
     if (value != value)
       return {};
-    const float x = fminf(fmaxf((value - valueMin) * scale, 0.f), float(size - 1));
+    const float x = clampf((value - valueMin) * scale, 0.f, float(size - 1));
     const int i = x >= float(size - 1) ? size - 2 : int(x);
     const float f = x - float(i);
     const Vec4f a = table[i], b = table[i + 1];
@@ -65,7 +65,7 @@ PartitionMetadata computePartitionMetadata(const Partitions &partitions, const T
 
 /// The paper's step size for a partition of normalised deviation `sigma` (§2.4).
 UVR_HOST_DEVICE inline float adaptiveStepSize(float s1, float s2, float p, float sigma) {
-  return fmaxf(s1 + (s2 - s1) * powf(fabsf(fminf(sigma, 1.f) - 1.f), p), s1);
+  return maxf(s1 + (s2 - s1) * powf(fabsf(minf(sigma, 1.f) - 1.f), p), s1);
 }
 
 } // namespace uvr
