@@ -43,7 +43,7 @@ struct RenderOptions {
 
 /// Defaults measured on the brain meshes (README, "Choosing defaults"): s2 = kDefaultS2Factor * s1.
 constexpr float kDefaultS2Factor = 8.f;
-constexpr float kDefaultP = 2.f;
+constexpr float kDefaultP = 4.f;
 
 Vec3f parseVector(const std::string &text, const std::string &option) {
   Vec3f v;
@@ -209,7 +209,7 @@ void addRenderCommand(CLI::App &app) {
       ->capture_default_str();
   cmd->add_option("--s1", o.s1, "Smallest (and fixed) step (default: cube root of the median cell volume)");
   cmd->add_option("--s2", o.s2, "Largest adaptive step (default: 8 * the default s1)");
-  cmd->add_option("--p", o.p, "Adaptive power, >= 1 (default: 2)");
+  cmd->add_option("--p", o.p, "Adaptive power, >= 1 (default: 4)");
   cmd->add_option("--unit", o.unit, "Opacity unit distance (default: the default s1)");
   cmd->add_option("--leaf-size", o.leafSize, "Most cells per partition")->capture_default_str();
   cmd->add_option("--size", o.size, "Image size WxH")->capture_default_str();

@@ -30,6 +30,7 @@ struct IntegratorSettings {
 struct SceneView {
   MeshView mesh;
   BvhView bvh;
+  const uint32_t *tetNeighbors = nullptr; ///< 4 per tet; see buildTetNeighbors
   PartitionsView partitions;
   const float *maxOpacity = nullptr; ///< per partition, for the current transfer function
   const float *sigma = nullptr;      ///< per partition, normalised colour deviation
@@ -38,10 +39,40 @@ struct SceneView {
 
 constexpr uint32_t kNoCell = 0xffffffffu;
 
-/// Finds the cell holding `p`, trying `cell` (the previous sample's) first, and returns the field there.
+/// Steps through tets towards `p`, from `cell` across the face it lies furthest beyond, as long as that
+/// is a tet; on success `cell` holds `p` and `value` the field there.
+UVR_HOST_DEVICE inline bool walkTets(const SceneView &scene, Vec3f p, uint32_t &cell, float &value) {
+  constexpr int kMaxSteps = 8; // consecutive samples lie a cell or two apart; beyond that the BVH is faster
+  const MeshView &mesh = scene.mesh;
+  uint32_t current = cell;
+  for (int step = 0; step < kMaxSteps && current < mesh.tetCount; ++step) {
+    const uint32_t *v = mesh.tets + 4 * uint64_t(current);
+    float w[4];
+    if (!tetBarycentrics(mesh.points[v[0]], mesh.points[v[1]], mesh.points[v[2]], mesh.points[v[3]], p, w))
+      return false;
+    const int exit = smallestWeight(w);
+    if (w[exit] >= -kInsideTolerance) {
+      value = mesh.cellCentered ? mesh.values[current]
+                                : w[0] * mesh.values[v[0]] + w[1] * mesh.values[v[1]] +
+                                      w[2] * mesh.values[v[2]] + w[3] * mesh.values[v[3]];
+      cell = current;
+      return true;
+    }
+    current = scene.tetNeighbors[4 * uint64_t(current) + uint64_t(exit)];
+  }
+  return false;
+}
+
+/// Finds the cell holding `p`, starting from `cell` (the previous sample's), and returns the field there.
 UVR_HOST_DEVICE inline bool locateSample(const SceneView &scene, Vec3f p, uint32_t &cell, float &value) {
-  if (cell != kNoCell && sampleCell(scene.mesh, cell, p, value))
-    return true;
+  if (cell != kNoCell) {
+    if (scene.tetNeighbors && cell < scene.mesh.tetCount) {
+      if (walkTets(scene, p, cell, value))
+        return true;
+    } else if (sampleCell(scene.mesh, cell, p, value)) {
+      return true;
+    }
+  }
   const uint32_t previous = cell;
   return findCell(scene.bvh, p, [&](uint32_t candidate) {
     if (candidate == previous || !sampleCell(scene.mesh, candidate, p, value))
@@ -59,14 +90,17 @@ struct RayResult {
 /// Integrates one ray front to back. Samples lie on the grid t = tEnter + k * s1 fixed along the ray (tEnter:
 /// where it enters the mesh bounds); a partition marched with step s starts at its first grid point, so skipping
 /// alone changes no sample that contributes, and s = s1 reproduces the fixed-step samples exactly.
+/// `hint` is a cell near the ray's first sample (the neighbouring pixel's: rays are coherent), or kNoCell; it
+/// is updated to this ray's first cell.
 UVR_HOST_DEVICE inline RayResult integrateRay(const SceneView &scene, const IntegratorSettings &settings,
-                                              const Ray &ray) {
+                                              const Ray &ray, uint32_t &hint) {
   RayResult result;
   float tEnter, tExit;
   if (!intersectBox(ray, scene.partitions.rootBounds, 0.f, INFINITY, tEnter, tExit))
     return result;
 
-  uint32_t cell = kNoCell;
+  uint32_t cell = hint;
+  bool first = true;
   // Marches [ta, tb) with step `step`; false once the ray is opaque.
   auto march = [&](float ta, float tb, float step) {
     const float s1 = settings.s1;
@@ -80,6 +114,10 @@ UVR_HOST_DEVICE inline RayResult integrateRay(const SceneView &scene, const Inte
       float value;
       if (!locateSample(scene, ray.at(t), cell, value))
         continue;
+      if (first) {
+        hint = cell;
+        first = false;
+      }
       const Vec4f c = scene.tf.sample(value);
       if (c.w <= 0.f)
         continue;

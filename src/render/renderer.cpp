@@ -2,6 +2,7 @@
 
 #include "core/error.h"
 #include "core/timer.h"
+#include "mesh/tet_neighbors.h"
 
 namespace uvr {
 
@@ -32,6 +33,7 @@ Renderer::Renderer(const Mesh &mesh, int fieldIndex, uint32_t leafSize) : mesh_(
   const Timer timer;
   meshView_ = makeMeshView(mesh_, fieldIndex);
   bvh_ = buildBvh(meshView_);
+  tetNeighbors_ = buildTetNeighbors(mesh_);
   partitions_ = buildPartitions(meshView_, leafSize);
   buildMs_ = timer.milliseconds();
 }
@@ -47,6 +49,7 @@ SceneView Renderer::sceneView() const {
   SceneView scene;
   scene.mesh = meshView_;
   scene.bvh = bvh_.view();
+  scene.tetNeighbors = tetNeighbors_.empty() ? nullptr : tetNeighbors_.data();
   scene.partitions = partitions_.view();
   scene.maxOpacity = metadata_.maxOpacity.data();
   scene.sigma = metadata_.sigma.data();

@@ -61,6 +61,7 @@ private:
   const Mesh &mesh_;
   MeshView meshView_;
   Bvh bvh_;
+  std::vector<uint32_t> tetNeighbors_;
   Partitions partitions_;
   std::optional<TransferFunction> tf_;
   PartitionMetadata metadata_;

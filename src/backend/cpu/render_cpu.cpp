@@ -18,9 +18,10 @@ void renderCpu(const SceneView &scene, const CameraView &camera, const RenderSet
   tbb::parallel_for(
       tbb::blocked_range2d<int>(0, settings.height, kTile, 0, settings.width, kTile),
       [&](const tbb::blocked_range2d<int> &tile) {
+        uint32_t hint = kNoCell;
         for (int y = tile.rows().begin(); y < tile.rows().end(); ++y)
           for (int x = tile.cols().begin(); x < tile.cols().end(); ++x) {
-            const RayResult r = integrateRay(scene, settings.integrator, camera.ray(x, y));
+            const RayResult r = integrateRay(scene, settings.integrator, camera.ray(x, y), hint);
             const float transmittance = 1.f - r.color.w;
             uint8_t *pixel = frame.image.pixel(x, y);
             pixel[0] = toByte(r.color.x + transmittance * settings.background.x);
