@@ -15,8 +15,8 @@ constexpr float kInsideTolerance = 1e-5f;
 
 UVR_HOST_DEVICE inline float det3(Vec3f a, Vec3f b, Vec3f c) { return dot(a, cross(b, c)); }
 
-/// Barycentric weights of `p` in tetrahedron (a, b, c, d); false when `p` is outside or the cell is flat.
-UVR_HOST_DEVICE inline bool tetWeights(Vec3f a, Vec3f b, Vec3f c, Vec3f d, Vec3f p, float w[4]) {
+/// Barycentric weights of `p` in tetrahedron (a, b, c, d), inside or not; false when the cell is flat.
+UVR_HOST_DEVICE inline bool tetBarycentrics(Vec3f a, Vec3f b, Vec3f c, Vec3f d, Vec3f p, float w[4]) {
   const Vec3f pa = a - p, pb = b - p, pc = c - p, pd = d - p;
   // Each weight is the volume of the tet with its vertex replaced by p, over the whole volume.
   const float w0 = det3(pb, pc, pd);
@@ -30,8 +30,21 @@ UVR_HOST_DEVICE inline bool tetWeights(Vec3f a, Vec3f b, Vec3f c, Vec3f d, Vec3f
   w[1] = w1 * inv;
   w[2] = w2 * inv;
   w[3] = 1.f - w[0] - w[1] - w[2];
-  const float lo = -kInsideTolerance;
-  return w[0] >= lo && w[1] >= lo && w[2] >= lo && w[3] >= lo;
+  return true;
+}
+
+/// Index of the smallest weight: the face (opposite that vertex) the point lies furthest beyond.
+UVR_HOST_DEVICE inline int smallestWeight(const float w[4]) {
+  int i = 0;
+  for (int k = 1; k < 4; ++k)
+    if (w[k] < w[i])
+      i = k;
+  return i;
+}
+
+/// Barycentric weights of `p` in tetrahedron (a, b, c, d); false when `p` is outside or the cell is flat.
+UVR_HOST_DEVICE inline bool tetWeights(Vec3f a, Vec3f b, Vec3f c, Vec3f d, Vec3f p, float w[4]) {
+  return tetBarycentrics(a, b, c, d, p, w) && w[smallestWeight(w)] >= -kInsideTolerance;
 }
 
 /// VTK's shape functions and their parametric derivatives for the non-simplex cells.

@@ -1,0 +1,832 @@
+// VTK XML UnstructuredGrid (.vtu) reader.
+//
+// Only the XML head is given to pugixml: appended raw data can hold any byte, so the text up to the '_'
+// marker of <AppendedData> is parsed alone and each appended array is read at its `offset` after the marker.
+#include "core/error.h"
+#include "io/mesh_io.h"
+
+#include <pugixml.hpp>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
+#include <zlib.h>
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <array>
+#include <atomic>
+#include <bit>
+#include <cerrno>
+#include <charconv>
+#include <cmath>
+#include <cstring>
+#include <memory>
+#include <string_view>
+
+namespace uvr {
+
+namespace {
+
+using Bytes = std::unique_ptr<uint8_t[]>;
+
+Bytes allocateBytes(uint64_t size) { return std::make_unique_for_overwrite<uint8_t[]>(size); }
+
+struct FileBuffer {
+  Bytes data; ///< the whole file plus a terminating zero
+  uint64_t size = 0;
+};
+
+FileBuffer loadFile(const std::string &path) {
+  int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0)
+    throw Error(path, "", std::string("cannot open file: ") + std::strerror(errno));
+  struct stat info {};
+  if (::fstat(fd, &info) != 0 || !S_ISREG(info.st_mode)) {
+    ::close(fd);
+    throw Error(path, "", "cannot open file: not a regular file");
+  }
+  FileBuffer file;
+  file.size = uint64_t(info.st_size);
+  file.data = allocateBytes(file.size + 1);
+  uint64_t done = 0;
+  while (done < file.size) {
+    ssize_t got = ::read(fd, file.data.get() + done, file.size - done);
+    if (got < 0 && errno == EINTR)
+      continue;
+    if (got <= 0) {
+      std::string why = got < 0 ? std::strerror(errno) : "file shrank while reading";
+      ::close(fd);
+      throw Error(path, "", "cannot read file: " + why);
+    }
+    done += uint64_t(got);
+  }
+  ::close(fd);
+  file.data[file.size] = 0;
+  return file;
+}
+
+bool multiplyOverflows(uint64_t a, uint64_t b, uint64_t &product) {
+  return __builtin_mul_overflow(a, b, &product);
+}
+
+bool isSpace(char c) { return c == ' ' || c == '\n' || c == '\r' || c == '\t'; }
+
+std::string_view trim(std::string_view s) {
+  while (!s.empty() && isSpace(s.front()))
+    s.remove_prefix(1);
+  while (!s.empty() && isSpace(s.back()))
+    s.remove_suffix(1);
+  return s;
+}
+
+enum class ScalarType : uint8_t {
+  Int8,
+  UInt8,
+  Int16,
+  UInt16,
+  Int32,
+  UInt32,
+  Int64,
+  UInt64,
+  Float32,
+  Float64
+};
+
+struct ScalarTypeName {
+  std::string_view name;
+  ScalarType type;
+};
+
+constexpr ScalarTypeName scalarTypeNames[] = {
+    {"Int8", ScalarType::Int8},       {"UInt8", ScalarType::UInt8},   {"Int16", ScalarType::Int16},
+    {"UInt16", ScalarType::UInt16},   {"Int32", ScalarType::Int32},   {"UInt32", ScalarType::UInt32},
+    {"Int64", ScalarType::Int64},     {"UInt64", ScalarType::UInt64}, {"Float32", ScalarType::Float32},
+    {"Float64", ScalarType::Float64},
+};
+
+/// Calls `f` with a zero of the C++ type that `type` names.
+template <typename F> decltype(auto) visitType(ScalarType type, F &&f) {
+  switch (type) {
+  case ScalarType::Int8:
+    return f(int8_t{});
+  case ScalarType::UInt8:
+    return f(uint8_t{});
+  case ScalarType::Int16:
+    return f(int16_t{});
+  case ScalarType::UInt16:
+    return f(uint16_t{});
+  case ScalarType::Int32:
+    return f(int32_t{});
+  case ScalarType::UInt32:
+    return f(uint32_t{});
+  case ScalarType::Int64:
+    return f(int64_t{});
+  case ScalarType::UInt64:
+    return f(uint64_t{});
+  case ScalarType::Float32:
+    return f(float{});
+  case ScalarType::Float64:
+    break;
+  }
+  return f(double{});
+}
+
+uint64_t sizeOf(ScalarType type) {
+  return visitType(type, [](auto zero) { return uint64_t(sizeof(zero)); });
+}
+
+bool isInteger(ScalarType type) { return type != ScalarType::Float32 && type != ScalarType::Float64; }
+
+template <typename T> constexpr ScalarType scalarTypeOf() {
+  if constexpr (std::is_same_v<T, float>)
+    return ScalarType::Float32;
+  else if constexpr (std::is_same_v<T, double>)
+    return ScalarType::Float64;
+  else if constexpr (std::is_same_v<T, int64_t>)
+    return ScalarType::Int64;
+  else
+    return ScalarType::UInt8;
+}
+
+template <typename T> T byteSwapped(T value) {
+  std::array<uint8_t, sizeof(T)> bytes;
+  std::memcpy(bytes.data(), &value, sizeof(T));
+  std::reverse(bytes.begin(), bytes.end());
+  std::memcpy(&value, bytes.data(), sizeof(T));
+  return value;
+}
+
+/// Runs f(begin, end) over [0, n) in parallel chunks.
+template <typename F> void parallelChunks(uint64_t n, F &&f) {
+  tbb::parallel_for(tbb::blocked_range<uint64_t>(0, n, 1 << 16),
+                    [&](const tbb::blocked_range<uint64_t> &r) { f(r.begin(), r.end()); });
+}
+
+/// The first i in [0, n) with bad(i), or n.
+template <typename Pred> uint64_t findFirst(uint64_t n, Pred &&bad) {
+  return tbb::parallel_reduce(
+      tbb::blocked_range<uint64_t>(0, n, 1 << 16), n,
+      [&](const tbb::blocked_range<uint64_t> &r, uint64_t found) {
+        for (uint64_t i = r.begin(); i < r.end() && i < found; ++i)
+          if (bad(i))
+            return i;
+        return found;
+      },
+      [](uint64_t a, uint64_t b) { return std::min(a, b); });
+}
+
+/// Converts `count` packed values of `type` (byte-swapped when `swap`) to Dst.
+template <typename Dst>
+void convert(ScalarType type, bool swap, const uint8_t *src, uint64_t count, Dst *dst) {
+  visitType(type, [&](auto zero) {
+    using Src = decltype(zero);
+    parallelChunks(count, [&](uint64_t begin, uint64_t end) {
+      for (uint64_t i = begin; i < end; ++i) {
+        Src value;
+        std::memcpy(&value, src + i * sizeof(Src), sizeof(Src));
+        dst[i] = static_cast<Dst>(swap ? byteSwapped(value) : value);
+      }
+    });
+  });
+}
+
+constexpr uint8_t base64Pad = 64, base64Space = 65, base64Invalid = 255;
+
+constexpr std::array<uint8_t, 256> base64Table = [] {
+  std::array<uint8_t, 256> table{};
+  table.fill(base64Invalid);
+  constexpr std::string_view alphabet = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  for (size_t i = 0; i < alphabet.size(); ++i)
+    table[uint8_t(alphabet[i])] = uint8_t(i);
+  table['='] = base64Pad;
+  for (char c : {' ', '\n', '\r', '\t'})
+    table[uint8_t(c)] = base64Space;
+  return table;
+}();
+
+/// Reads an array's bytes in order, from raw memory or from base64 text. The base64 text may be made of
+/// several separately padded runs (VTK encodes a compressed array's header apart from its data) and may
+/// hold whitespace.
+class ByteStream {
+public:
+  ByteStream(const uint8_t *begin, const uint8_t *end, bool base64)
+      : pos_(begin), end_(end), base64_(base64) {}
+
+  /// Copies the next n bytes to dst; false (see problem()) if the input ends first or is not base64.
+  bool read(uint8_t *dst, uint64_t n) {
+    if (!base64_) {
+      if (n > uint64_t(end_ - pos_))
+        return fail("the file ends inside this array");
+      std::memcpy(dst, pos_, n);
+      pos_ += n;
+      return true;
+    }
+    while (n > 0) {
+      if (pendingBegin_ < pendingEnd_) {
+        uint64_t k = std::min<uint64_t>(n, pendingEnd_ - pendingBegin_);
+        std::memcpy(dst, pending_ + pendingBegin_, k);
+        pendingBegin_ += int(k);
+        dst += k;
+        n -= k;
+        continue;
+      }
+      while (n >= 3 && end_ - pos_ >= 4) {
+        uint32_t a = base64Table[pos_[0]], b = base64Table[pos_[1]], c = base64Table[pos_[2]],
+                 d = base64Table[pos_[3]];
+        if ((a | b | c | d) >= 64)
+          break;
+        uint32_t bits = a << 18 | b << 12 | c << 6 | d;
+        dst[0] = uint8_t(bits >> 16);
+        dst[1] = uint8_t(bits >> 8);
+        dst[2] = uint8_t(bits);
+        dst += 3;
+        n -= 3;
+        pos_ += 4;
+      }
+      if (n > 0 && !decodeQuantum())
+        return false;
+    }
+    return true;
+  }
+
+  /// More bytes than are left: sizes beyond this cannot be held by the input.
+  uint64_t available() const {
+    uint64_t left = uint64_t(end_ - pos_);
+    return base64_ ? (left + 3) / 4 * 3 + uint64_t(pendingEnd_ - pendingBegin_) : left;
+  }
+  const uint8_t *position() const { return pos_; }
+  const char *problem() const { return problem_; }
+
+private:
+  bool fail(const char *problem) {
+    problem_ = problem;
+    return false;
+  }
+
+  /// Decodes the next four symbols (skipping whitespace) into pending_.
+  bool decodeQuantum() {
+    uint8_t symbols[4];
+    int count = 0;
+    while (count < 4) {
+      if (pos_ == end_)
+        return fail(count == 0 ? "the base64 text ends inside this array"
+                               : "base64 text ends inside a group of four");
+      uint8_t symbol = base64Table[*pos_++];
+      if (symbol == base64Invalid) {
+        --pos_;
+        return fail("invalid base64 character");
+      }
+      if (symbol != base64Space)
+        symbols[count++] = symbol;
+    }
+    int bytes = symbols[3] != base64Pad ? 3 : symbols[2] != base64Pad ? 2 : 1;
+    bool misplacedPad = symbols[0] == base64Pad || symbols[1] == base64Pad ||
+                        (symbols[2] == base64Pad && symbols[3] != base64Pad);
+    if (misplacedPad)
+      return fail("misplaced base64 padding '='");
+    uint32_t bits = 0;
+    for (int i = 0; i < 4; ++i)
+      bits = bits << 6 | (symbols[i] == base64Pad ? 0u : symbols[i]);
+    pending_[0] = uint8_t(bits >> 16);
+    pending_[1] = uint8_t(bits >> 8);
+    pending_[2] = uint8_t(bits);
+    pendingBegin_ = 0;
+    pendingEnd_ = bytes;
+    return true;
+  }
+
+  const uint8_t *pos_, *end_;
+  bool base64_;
+  uint8_t pending_[3] = {};
+  int pendingBegin_ = 0, pendingEnd_ = 0;
+  const char *problem_ = "";
+};
+
+enum class Format { Ascii, Binary, Appended };
+
+/// One <DataArray>, located but not decoded.
+struct ArrayInfo {
+  std::string name;
+  ScalarType type = ScalarType::Float32;
+  uint64_t components = 1;
+  Format format = Format::Ascii;
+  uint64_t offset = 0;   ///< appended: bytes (raw) or characters (base64) after the '_' marker
+  std::string_view text; ///< ascii and binary: the element's text
+  uint64_t position = 0; ///< the element's byte in the file
+};
+
+/// Where an array's bytes come from once its header is checked: contiguous bytes, or zlib blocks of them.
+struct Payload {
+  struct Block {
+    uint64_t source, sourceSize, target, targetSize;
+  };
+  const uint8_t *data = nullptr; ///< the uncompressed bytes, or the concatenated zlib blocks
+  Bytes storage;                 ///< base64-decoded bytes behind `data`
+  uint64_t size = 0;             ///< uncompressed bytes
+  std::vector<Block> blocks;     ///< empty when uncompressed
+  uint64_t position = 0;         ///< byte in the file, for errors
+};
+
+/// zlib never inflates more than about 1032:1, so a header claiming more is corrupt (and must not be
+/// allocated).
+constexpr uint64_t maxZlibRatio = 1032;
+
+class VtuReader {
+public:
+  explicit VtuReader(const std::string &path) : path_(path), file_(loadFile(path)) {}
+
+  UnstructuredGrid read() {
+    parseXml();
+    pugi::xml_node root = doc_.document_element();
+    if (std::string_view(root.name()) != "VTKFile")
+      fail(position(root), "expected a <VTKFile> root element, got <" + std::string(root.name()) + ">");
+    readFileAttributes(root);
+    std::string_view type = root.attribute("type").value();
+    pugi::xml_node grid = root.child("UnstructuredGrid");
+    if (type != "UnstructuredGrid" || !grid)
+      fail(position(root),
+           "unsupported dataset type '" + std::string(type) + "' (expected UnstructuredGrid)");
+
+    std::vector<UnstructuredGrid> pieces;
+    std::vector<uint64_t> piecePositions;
+    for (pugi::xml_node piece : grid.children("Piece")) {
+      pieces.push_back(readPiece(piece));
+      piecePositions.push_back(position(piece));
+    }
+    if (pieces.empty())
+      fail(position(grid), "expected at least one <Piece> in <UnstructuredGrid>");
+    return merge(std::move(pieces), piecePositions);
+  }
+
+private:
+  [[noreturn]] void fail(uint64_t byte, const std::string &what) const {
+    throw Error(path_, "byte " + std::to_string(byte), what);
+  }
+  [[noreturn]] void fail(const ArrayInfo &array, uint64_t byte, const std::string &what) const {
+    fail(byte, "DataArray '" + array.name + "': " + what);
+  }
+
+  const char *fileChars() const { return reinterpret_cast<const char *>(file_.data.get()); }
+
+  uint64_t position(pugi::xml_node node) const {
+    return uint64_t(std::max<ptrdiff_t>(node.offset_debug(), 0));
+  }
+  uint64_t position(const char *xmlText) const { return uint64_t(xmlText - xmlBase_); }
+
+  void parseXml() {
+    std::string_view all(fileChars(), file_.size);
+    constexpr unsigned options = pugi::parse_default & ~pugi::parse_eol; // keeps text where it is in the file
+    size_t tag = all.find("<AppendedData");
+    pugi::xml_parse_result result;
+    if (tag == std::string_view::npos) {
+      xmlBase_ = fileChars();
+      result = doc_.load_buffer_inplace(file_.data.get(), file_.size, options, pugi::encoding_utf8);
+    } else {
+      size_t tagEnd = all.find('>', tag);
+      if (tagEnd == std::string_view::npos)
+        fail(tag, "unterminated <AppendedData> tag");
+      size_t marker = tagEnd + 1;
+      while (marker < all.size() && isSpace(all[marker]))
+        ++marker;
+      if (marker == all.size() || all[marker] != '_')
+        fail(marker, "expected '_' at the start of the appended data");
+      appended_ = file_.data.get() + marker + 1;
+      head_ = std::string(all.substr(0, tagEnd + 1)) + "</AppendedData></VTKFile>";
+      xmlBase_ = head_.data();
+      result = doc_.load_buffer_inplace(head_.data(), head_.size(), options, pugi::encoding_utf8);
+      if (result && all[tagEnd - 1] == '/')
+        fail(tag, "<AppendedData/> is empty");
+    }
+    if (!result)
+      fail(uint64_t(std::max<ptrdiff_t>(result.offset, 0)),
+           std::string("malformed XML: ") + result.description());
+    if (appended_) {
+      pugi::xml_node appendedNode = doc_.document_element().child("AppendedData");
+      std::string_view encoding = appendedNode.attribute("encoding").value();
+      if (encoding != "raw" && encoding != "base64")
+        fail(position(appendedNode),
+             "unsupported <AppendedData> encoding '" + std::string(encoding) + "' (expected raw or base64)");
+      appendedBase64_ = encoding == "base64";
+    }
+  }
+
+  void readFileAttributes(pugi::xml_node root) {
+    std::string_view byteOrder = root.attribute("byte_order").as_string("LittleEndian");
+    if (byteOrder != "LittleEndian" && byteOrder != "BigEndian")
+      fail(position(root), "unsupported byte_order '" + std::string(byteOrder) + "'");
+    swap_ = (byteOrder == "BigEndian") != (std::endian::native == std::endian::big);
+
+    std::string_view headerType = root.attribute("header_type").as_string("UInt32");
+    if (headerType != "UInt32" && headerType != "UInt64")
+      fail(position(root),
+           "unsupported header_type '" + std::string(headerType) + "' (expected UInt32 or UInt64)");
+    headerBytes_ = headerType == "UInt32" ? 4 : 8;
+
+    std::string_view compressor = root.attribute("compressor").value();
+    if (!compressor.empty() && compressor != "vtkZLibDataCompressor")
+      fail(position(root),
+           "unsupported compressor '" + std::string(compressor) + "' (only vtkZLibDataCompressor)");
+    compressed_ = !compressor.empty();
+  }
+
+  uint64_t countAttribute(pugi::xml_node node, const char *name) const {
+    std::string_view text = trim(node.attribute(name).value());
+    uint64_t value = 0;
+    auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
+    if (text.empty() || ec != std::errc() || end != text.data() + text.size())
+      fail(position(node), std::string("expected a non-negative integer ") + name + "=\"...\" on <" +
+                               node.name() + ">, got '" + node.attribute(name).value() + "'");
+    return value;
+  }
+
+  ArrayInfo arrayInfo(pugi::xml_node node) const {
+    ArrayInfo array;
+    array.name = node.attribute("Name").value();
+    array.position = position(node);
+    std::string_view type = node.attribute("type").value();
+    auto known = std::find_if(std::begin(scalarTypeNames), std::end(scalarTypeNames),
+                              [&](const ScalarTypeName &t) { return t.name == type; });
+    if (known == std::end(scalarTypeNames))
+      fail(array, array.position, "unsupported type '" + std::string(type) + "'");
+    array.type = known->type;
+    if (node.attribute("NumberOfComponents")) {
+      array.components = countAttribute(node, "NumberOfComponents");
+      if (array.components == 0 || array.components > (1u << 16))
+        fail(array, array.position, "NumberOfComponents must be in 1..65536");
+    }
+    std::string_view format = node.attribute("format").value();
+    if (format == "appended") {
+      if (!appended_)
+        fail(array, array.position, "format=\"appended\" but the file has no <AppendedData>");
+      array.format = Format::Appended;
+      array.offset = countAttribute(node, "offset");
+      return array;
+    }
+    if (format != "ascii" && format != "binary")
+      fail(array, array.position, "unsupported format '" + std::string(format) + "'");
+    array.format = format == "ascii" ? Format::Ascii : Format::Binary;
+    for (pugi::xml_node child : node.children()) {
+      if (child.type() == pugi::node_pcdata) {
+        array.text = child.value();
+        break;
+      }
+    }
+    if (array.text.empty())
+      array.text = std::string_view(xmlBase_ + array.position, 0);
+    return array;
+  }
+
+  /// Checks an array's header against the file and `bytes` (what the caller expects) before anything is
+  /// allocated from it.
+  Payload locate(const ArrayInfo &array, uint64_t bytes) const {
+    const uint8_t *begin, *end;
+    bool base64 = true;
+    if (array.format == Format::Binary) {
+      begin = reinterpret_cast<const uint8_t *>(array.text.data());
+      end = begin + array.text.size();
+    } else {
+      end = file_.data.get() + file_.size;
+      if (array.offset > uint64_t(end - appended_))
+        fail(array, array.position,
+             "offset " + std::to_string(array.offset) + " is past the end of the file");
+      begin = appended_ + array.offset;
+      base64 = appendedBase64_;
+    }
+    const uint8_t *fileStart =
+        array.format == Format::Binary ? reinterpret_cast<const uint8_t *>(xmlBase_) : file_.data.get();
+    ByteStream stream(begin, end, base64);
+    const std::string endsFirst =
+        array.format == Format::Binary ? " but its text ends first" : " but the file ends first";
+    auto here = [&] { return uint64_t(stream.position() - fileStart); };
+    auto readOrFail = [&](uint8_t *dst, uint64_t n) {
+      if (!stream.read(dst, n))
+        fail(array, here(), stream.problem());
+    };
+    auto word = [&] {
+      uint8_t raw[8];
+      readOrFail(raw, uint64_t(headerBytes_));
+      if (swap_)
+        std::reverse(raw, raw + headerBytes_);
+      if (headerBytes_ == 4) {
+        uint32_t value;
+        std::memcpy(&value, raw, 4);
+        return uint64_t(value);
+      }
+      uint64_t value;
+      std::memcpy(&value, raw, 8);
+      return value;
+    };
+
+    Payload payload;
+    payload.position = here();
+    if (!compressed_) {
+      payload.size = word();
+      if (payload.size != bytes)
+        fail(array, payload.position,
+             "holds " + std::to_string(payload.size) + " bytes, expected " + std::to_string(bytes));
+      if (payload.size > stream.available())
+        fail(array, here(), std::to_string(payload.size) + " bytes declared" + endsFirst);
+      if (base64) {
+        payload.storage = allocateBytes(payload.size);
+        readOrFail(payload.storage.get(), payload.size);
+        payload.data = payload.storage.get();
+      } else {
+        payload.data = stream.position();
+      }
+      return payload;
+    }
+
+    uint64_t blockCount = word(), blockSize = word(), lastSize = word();
+    if (blockCount > stream.available() / uint64_t(headerBytes_))
+      fail(array, here(), std::to_string(blockCount) + " compressed blocks declared" + endsFirst);
+    if (lastSize > blockSize)
+      fail(array, payload.position, "last block size exceeds the block size");
+    uint64_t total = 0;
+    if (blockCount > 0 && (multiplyOverflows(blockCount - 1, blockSize, total) ||
+                           __builtin_add_overflow(total, lastSize ? lastSize : blockSize, &total)))
+      fail(array, payload.position, "compression header sizes overflow");
+    if (total != bytes)
+      fail(array, payload.position,
+           "inflates to " + std::to_string(total) + " bytes, expected " + std::to_string(bytes));
+    payload.size = total;
+    payload.blocks.resize(blockCount);
+    uint64_t compressedTotal = 0;
+    for (uint64_t i = 0; i < blockCount; ++i) {
+      Payload::Block &block = payload.blocks[i];
+      block.source = compressedTotal;
+      block.sourceSize = word();
+      block.target = i * blockSize;
+      block.targetSize = i + 1 == blockCount && lastSize ? lastSize : blockSize;
+      if (__builtin_add_overflow(compressedTotal, block.sourceSize, &compressedTotal) ||
+          block.targetSize / maxZlibRatio > block.sourceSize)
+        fail(array, payload.position, "compressed block " + std::to_string(i) + " has an impossible size");
+    }
+    if (compressedTotal > stream.available())
+      fail(array, here(), std::to_string(compressedTotal) + " compressed bytes declared" + endsFirst);
+    payload.position = here();
+    if (base64) {
+      payload.storage = allocateBytes(compressedTotal);
+      readOrFail(payload.storage.get(), compressedTotal);
+      payload.data = payload.storage.get();
+    } else {
+      payload.data = stream.position();
+    }
+    return payload;
+  }
+
+  /// Writes the payload's uncompressed bytes to dst, inflating zlib blocks in parallel.
+  void decode(const ArrayInfo &array, const Payload &payload, uint8_t *dst) const {
+    if (payload.blocks.empty()) {
+      std::memcpy(dst, payload.data, payload.size);
+      return;
+    }
+    std::atomic<int> status{Z_OK};
+    std::atomic<uint64_t> badBlock{0};
+    tbb::parallel_for(size_t(0), payload.blocks.size(), [&](size_t i) {
+      const Payload::Block &block = payload.blocks[i];
+      uLongf inflated = block.targetSize;
+      int rc = ::uncompress(dst + block.target, &inflated, payload.data + block.source, block.sourceSize);
+      if (rc == Z_OK && inflated != block.targetSize)
+        rc = Z_DATA_ERROR;
+      int expected = Z_OK;
+      if (rc != Z_OK && status.compare_exchange_strong(expected, rc))
+        badBlock = i;
+    });
+    if (status != Z_OK) {
+      const Payload::Block &block = payload.blocks[badBlock];
+      fail(array, payload.position + block.source,
+           "zlib block " + std::to_string(badBlock.load()) + " is corrupt (" + zError(status) + ")");
+    }
+  }
+
+  template <typename T> void parseAscii(const ArrayInfo &array, uint64_t count, T *out) const {
+    const char *p = array.text.data(), *end = p + array.text.size();
+    auto skipSpace = [&] {
+      while (p != end && isSpace(*p))
+        ++p;
+    };
+    for (uint64_t i = 0; i < count; ++i) {
+      skipSpace();
+      if (p == end)
+        fail(array, position(p), "holds " + std::to_string(i) + " values, expected " + std::to_string(count));
+      const char *tokenEnd = p;
+      while (tokenEnd != end && !isSpace(*tokenEnd))
+        ++tokenEnd;
+      bool ok = visitType(array.type, [&](auto zero) {
+        using Parsed = std::conditional_t<
+            std::is_floating_point_v<decltype(zero)>, double,
+            std::conditional_t<std::is_same_v<decltype(zero), uint64_t>, uint64_t, int64_t>>;
+        Parsed value{};
+        auto [stop, ec] = std::from_chars(p, tokenEnd, value);
+        out[i] = static_cast<T>(value);
+        return ec == std::errc() && stop == tokenEnd;
+      });
+      if (!ok)
+        fail(array, position(p),
+             "invalid number '" + std::string(p, std::min<size_t>(tokenEnd - p, 40)) + "'");
+      p = tokenEnd;
+    }
+    skipSpace();
+    if (p != end)
+      fail(array, position(p), "holds more than the expected " + std::to_string(count) + " values");
+  }
+
+  /// Checks that the array can hold `count` values (throwing if not): call before allocating for them.
+  Payload prepare(const ArrayInfo &array, uint64_t count) const {
+    if (array.format == Format::Ascii) {
+      if (count > array.text.size() / 2 + 1)
+        fail(array, position(array.text.data()),
+             "expected " + std::to_string(count) + " values but its text is too short to hold them");
+      return {};
+    }
+    uint64_t bytes = 0;
+    if (multiplyOverflows(count, sizeOf(array.type), bytes))
+      fail(array, array.position, "expected value count overflows");
+    return locate(array, bytes);
+  }
+
+  /// Writes the array's `count` values (as prepared) to out, converted to T.
+  template <typename T>
+  void fill(const ArrayInfo &array, const Payload &payload, uint64_t count, T *out) const {
+    if (array.format == Format::Ascii) {
+      parseAscii(array, count, out);
+    } else if (array.type == scalarTypeOf<T>() && !swap_) {
+      decode(array, payload, reinterpret_cast<uint8_t *>(out));
+    } else if (payload.blocks.empty()) {
+      convert(array.type, swap_, payload.data, count, out);
+    } else {
+      Bytes bytes = allocateBytes(payload.size);
+      decode(array, payload, bytes.get());
+      convert(array.type, swap_, bytes.get(), count, out);
+    }
+  }
+
+  template <typename T> std::vector<T> readValues(const ArrayInfo &array, uint64_t count) const {
+    Payload payload = prepare(array, count);
+    std::vector<T> values(count);
+    fill(array, payload, count, values.data());
+    return values;
+  }
+
+  ArrayInfo cellArray(pugi::xml_node cells, std::string_view name, pugi::xml_node piece) const {
+    for (pugi::xml_node node : cells.children("DataArray")) {
+      if (node.attribute("Name").value() == name) {
+        ArrayInfo array = arrayInfo(node);
+        if (!isInteger(array.type) || array.components != 1)
+          fail(array, array.position, "expected one integer component");
+        return array;
+      }
+    }
+    fail(position(cells ? cells : piece),
+         "expected <Cells> with a DataArray named '" + std::string(name) + "'");
+  }
+
+  UnstructuredGrid readPiece(pugi::xml_node piece) const {
+    uint64_t pointCount = countAttribute(piece, "NumberOfPoints");
+    uint64_t cellCount = countAttribute(piece, "NumberOfCells");
+    UnstructuredGrid grid;
+
+    if (pointCount > 0) {
+      pugi::xml_node node = piece.child("Points").child("DataArray");
+      if (!node)
+        fail(position(piece), "expected <Points> with a DataArray");
+      ArrayInfo array = arrayInfo(node);
+      if (array.components != 3)
+        fail(array, array.position, "points need 3 components, got " + std::to_string(array.components));
+      uint64_t values = 0;
+      if (multiplyOverflows(pointCount, 3, values))
+        fail(position(piece), "NumberOfPoints overflows");
+      static_assert(sizeof(Vec3f) == 3 * sizeof(float));
+      Payload payload = prepare(array, values);
+      grid.points.resize(pointCount);
+      fill(array, payload, values, &grid.points[0].x);
+      uint64_t bad = findFirst(pointCount, [&](uint64_t i) {
+        Vec3f p = grid.points[i];
+        return !std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z);
+      });
+      if (bad < pointCount)
+        fail(array, array.position, "point " + std::to_string(bad) + " is not finite");
+    }
+
+    grid.offsets.assign(1, 0);
+    if (cellCount > 0) {
+      pugi::xml_node cells = piece.child("Cells");
+      ArrayInfo offsets = cellArray(cells, "offsets", piece);
+      ArrayInfo connectivity = cellArray(cells, "connectivity", piece);
+      ArrayInfo types = cellArray(cells, "types", piece);
+
+      // The file stores each cell's end; the grid also keeps the leading zero.
+      Payload payload = prepare(offsets, cellCount);
+      grid.offsets.resize(cellCount + 1);
+      fill(offsets, payload, cellCount, grid.offsets.data() + 1);
+      uint64_t bad = findFirst(cellCount, [&](uint64_t i) { return grid.offsets[i + 1] < grid.offsets[i]; });
+      if (bad < cellCount)
+        fail(offsets, offsets.position, "offsets decrease (or start below 0) at cell " + std::to_string(bad));
+
+      uint64_t connectivityCount = uint64_t(grid.offsets.back());
+      grid.connectivity = readValues<int64_t>(connectivity, connectivityCount);
+      bad = findFirst(connectivityCount, [&](uint64_t i) {
+        return grid.connectivity[i] < 0 || uint64_t(grid.connectivity[i]) >= pointCount;
+      });
+      if (bad < connectivityCount)
+        fail(connectivity, connectivity.position,
+             "point index " + std::to_string(grid.connectivity[bad]) + " at entry " + std::to_string(bad) +
+                 " is outside [0, " + std::to_string(pointCount) + ")");
+
+      if (types.type == ScalarType::UInt8) {
+        grid.types = readValues<uint8_t>(types, cellCount);
+      } else {
+        std::vector<int64_t> codes = readValues<int64_t>(types, cellCount);
+        bad = findFirst(cellCount, [&](uint64_t i) { return codes[i] < 0 || codes[i] > 255; });
+        if (bad < cellCount)
+          fail(types, types.position, "cell type " + std::to_string(codes[bad]) + " is not a VTK type code");
+        grid.types.assign(codes.begin(), codes.end());
+      }
+    }
+
+    readFields(piece.child("PointData"), Centering::Point, pointCount, grid.fields);
+    readFields(piece.child("CellData"), Centering::Cell, cellCount, grid.fields);
+    return grid;
+  }
+
+  /// Every numeric array becomes one field; several components become their Euclidean magnitude, as the
+  /// renderer maps a single scalar. String arrays are skipped.
+  void readFields(pugi::xml_node data, Centering centering, uint64_t tuples,
+                  std::vector<ScalarField> &fields) const {
+    for (pugi::xml_node node : data.children("DataArray")) {
+      if (std::string_view(node.attribute("type").value()) == "String")
+        continue;
+      ArrayInfo array = arrayInfo(node);
+      uint64_t count = 0;
+      if (multiplyOverflows(tuples, array.components, count))
+        fail(array, array.position, "value count overflows");
+      ScalarField field{array.name, centering, readValues<float>(array, count)};
+      if (array.components > 1) {
+        std::vector<float> magnitude(tuples);
+        uint64_t components = array.components;
+        parallelChunks(tuples, [&](uint64_t begin, uint64_t end) {
+          for (uint64_t i = begin; i < end; ++i) {
+            double sum = 0.0;
+            for (uint64_t c = 0; c < components; ++c)
+              sum += double(field.values[i * components + c]) * field.values[i * components + c];
+            magnitude[i] = float(std::sqrt(sum));
+          }
+        });
+        field.values = std::move(magnitude);
+      }
+      fields.push_back(std::move(field));
+    }
+  }
+
+  /// Concatenates pieces: point indices and offsets of later pieces are shifted past the earlier ones.
+  UnstructuredGrid merge(std::vector<UnstructuredGrid> pieces, const std::vector<uint64_t> &positions) const {
+    if (pieces.size() == 1)
+      return std::move(pieces[0]);
+    UnstructuredGrid grid;
+    grid.offsets.assign(1, 0);
+    for (const ScalarField &f : pieces[0].fields)
+      grid.fields.push_back({f.name, f.centering, {}});
+    for (size_t p = 0; p < pieces.size(); ++p) {
+      UnstructuredGrid &piece = pieces[p];
+      bool sameFields = piece.fields.size() == grid.fields.size();
+      for (size_t f = 0; sameFields && f < grid.fields.size(); ++f)
+        sameFields = piece.fields[f].name == grid.fields[f].name &&
+                     piece.fields[f].centering == grid.fields[f].centering;
+      if (!sameFields)
+        fail(positions[p], "this <Piece> has other data arrays than the first one");
+      auto pointBase = int64_t(grid.points.size());
+      auto connectivityBase = int64_t(grid.connectivity.size());
+      grid.points.insert(grid.points.end(), piece.points.begin(), piece.points.end());
+      for (size_t i = 1; i < piece.offsets.size(); ++i)
+        grid.offsets.push_back(piece.offsets[i] + connectivityBase);
+      for (int64_t index : piece.connectivity)
+        grid.connectivity.push_back(index + pointBase);
+      grid.types.insert(grid.types.end(), piece.types.begin(), piece.types.end());
+      for (size_t f = 0; f < grid.fields.size(); ++f)
+        grid.fields[f].values.insert(grid.fields[f].values.end(), piece.fields[f].values.begin(),
+                                     piece.fields[f].values.end());
+      piece = {};
+    }
+    return grid;
+  }
+
+  std::string path_;
+  FileBuffer file_;
+  std::string head_; ///< the XML before the appended data, closed off
+  const char *xmlBase_ = "";
+  pugi::xml_document doc_;
+  const uint8_t *appended_ = nullptr; ///< first byte after the '_' marker
+  bool appendedBase64_ = false;
+  bool swap_ = false;
+  int headerBytes_ = 4;
+  bool compressed_ = false;
+};
+
+} // namespace
+
+UnstructuredGrid readVtu(const std::string &path) { return VtuReader(path).read(); }
+
+} // namespace uvr
