@@ -185,3 +185,30 @@ TEST(Integrator, WindingDoesNotChangeTheImage) {
   expectSameFrame(frames[0], frames[1], 0.f, 0);
   expectSameFrame(frames[0], frames[2], 0.f, 0);
 }
+
+TEST(TransferFunction, MetadataMatchesAScanOfTheTable) {
+  const TransferFunction tf(rampMap(), 0.f, 1.f, 257);
+  const std::vector<Vec4f> &table = tf.table();
+  for (float a : {0.f, 0.1f, 0.5f, 0.61f, 0.99f})
+    for (float b : {0.f, 0.2f, 0.55f, 0.7f, 1.f, 3.f}) {
+      if (b < a)
+        continue;
+      const int first = int(std::floor(a * 256.f)), last = std::min(256, int(std::ceil(b * 256.f)));
+      float maxOpacity = 0.f;
+      double sum[4] = {}, squares[4] = {};
+      for (int i = first; i <= last; ++i) {
+        maxOpacity = std::max(maxOpacity, table[size_t(i)].w);
+        const double c[4] = {table[size_t(i)].x, table[size_t(i)].y, table[size_t(i)].z, table[size_t(i)].w};
+        for (int k = 0; k < 4; ++k)
+          sum[k] += c[k], squares[k] += c[k] * c[k];
+      }
+      double variance = 0.0;
+      const double n = last - first + 1;
+      for (int k = 0; k < 4; ++k)
+        variance += std::max(0.0, squares[k] / n - (sum[k] / n) * (sum[k] / n));
+      EXPECT_EQ(tf.maxOpacity(a, b), maxOpacity) << a << ".." << b;
+      EXPECT_NEAR(tf.colorVariance(a, b), variance, 1e-6) << a << ".." << b;
+    }
+  EXPECT_EQ(tf.maxOpacity(0.f, 0.5f), 0.f);
+  EXPECT_GT(tf.maxOpacity(0.f, 0.6f), 0.f);
+}

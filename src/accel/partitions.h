@@ -42,7 +42,7 @@ struct Partitions {
 Partitions buildPartitions(const MeshView &mesh, uint32_t leafSize);
 
 /// Default `leafSize`: measured on the brain meshes (see README, "Choosing defaults").
-constexpr uint32_t kDefaultLeafSize = 2048;
+constexpr uint32_t kDefaultLeafSize = 64;
 
 /// Visits the partitions that the ray [tMin, tMax] crosses, front to back, as `visit(partition, t0, t1)`
 /// with the ray's exact interval inside the leaf; stops when `visit` returns false. Neighbouring leaves share

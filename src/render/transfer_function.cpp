@@ -5,6 +5,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 
 namespace uvr {
@@ -14,6 +15,26 @@ TransferFunction::TransferFunction(const ColorMap &map, float valueMin, float va
   if (!(valueMax >= valueMin) || !std::isfinite(valueMin) || !std::isfinite(valueMax))
     throw Error("invalid transfer-function range [" + std::to_string(valueMin) + ", " + std::to_string(valueMax) +
                 "]");
+  const size_t n = table_.size();
+  prefixSum_.assign(4 * (n + 1), 0.0);
+  prefixSquares_.assign(4 * (n + 1), 0.0);
+  for (size_t i = 0; i < n; ++i) {
+    const double channel[4] = {table_[i].x, table_[i].y, table_[i].z, table_[i].w};
+    for (int k = 0; k < 4; ++k) {
+      prefixSum_[4 * (i + 1) + size_t(k)] = prefixSum_[4 * i + size_t(k)] + channel[k];
+      prefixSquares_[4 * (i + 1) + size_t(k)] = prefixSquares_[4 * i + size_t(k)] + channel[k] * channel[k];
+    }
+  }
+  opacityMax_.emplace_back(n);
+  for (size_t i = 0; i < n; ++i)
+    opacityMax_[0][i] = table_[i].w;
+  for (size_t span = 2; span <= n; span *= 2) {
+    const std::vector<float> &previous = opacityMax_.back();
+    std::vector<float> level(n - span + 1);
+    for (size_t i = 0; i < level.size(); ++i)
+      level[i] = std::max(previous[i], previous[i + span / 2]);
+    opacityMax_.push_back(std::move(level));
+  }
 }
 
 TransferFunctionView TransferFunction::view() const {
@@ -34,10 +55,10 @@ float TransferFunction::maxOpacity(float a, float b) const {
     return 0.f; // no finite value in the range
   int first, last;
   entryRange(a, b, first, last);
-  float result = 0.f;
-  for (int i = first; i <= last; ++i)
-    result = std::max(result, table_[size_t(i)].w);
-  return result;
+  const auto count = unsigned(last - first + 1);
+  const int level = std::bit_width(count) - 1; // two overlapping runs of 2^level entries cover [first, last]
+  const std::vector<float> &maxima = opacityMax_[size_t(level)];
+  return std::max(maxima[size_t(first)], maxima[size_t(last + 1 - (1 << level))]);
 }
 
 float TransferFunction::colorVariance(float a, float b) const {
@@ -45,19 +66,13 @@ float TransferFunction::colorVariance(float a, float b) const {
     return 0.f;
   int first, last;
   entryRange(a, b, first, last);
-  double sum[4] = {}, sumSquares[4] = {};
-  for (int i = first; i <= last; ++i) {
-    const Vec4f &c = table_[size_t(i)];
-    const double channel[4] = {c.x, c.y, c.z, c.w};
-    for (int k = 0; k < 4; ++k) {
-      sum[k] += channel[k];
-      sumSquares[k] += channel[k] * channel[k];
-    }
-  }
   const double n = double(last - first + 1);
   double variance = 0.0;
-  for (int k = 0; k < 4; ++k)
-    variance += std::max(0.0, sumSquares[k] / n - (sum[k] / n) * (sum[k] / n));
+  for (size_t k = 0; k < 4; ++k) {
+    const double sum = prefixSum_[4 * size_t(last + 1) + k] - prefixSum_[4 * size_t(first) + k];
+    const double squares = prefixSquares_[4 * size_t(last + 1) + k] - prefixSquares_[4 * size_t(first) + k];
+    variance += std::max(0.0, squares / n - (sum / n) * (sum / n));
+  }
   return float(variance);
 }
 

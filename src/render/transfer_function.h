@@ -41,9 +41,9 @@ public:
   float valueMax() const { return valueMax_; }
   const std::vector<Vec4f> &table() const { return table_; }
 
-  /// Highest opacity the function takes over [a, b]; never below the true maximum.
+  /// Highest opacity the function takes over [a, b]; never below the true maximum. Constant time.
   float maxOpacity(float a, float b) const;
-  /// Variance of colour and opacity (summed over r, g, b, a) over [a, b].
+  /// Variance of colour and opacity (summed over r, g, b, a) over [a, b]. Constant time.
   float colorVariance(float a, float b) const;
 
 private:
@@ -51,6 +51,10 @@ private:
 
   std::vector<Vec4f> table_;
   float valueMin_, valueMax_;
+  // Prefix sums of each channel and its square, and a sparse table of opacity maxima (level k holds the
+  // maximum over 2^k entries), so that a partition's metadata costs O(1) whatever its range.
+  std::vector<double> prefixSum_, prefixSquares_; ///< 4 per entry, entry 0 = 0
+  std::vector<std::vector<float>> opacityMax_;
 };
 
 /// What space skipping and adaptive sampling read per partition; recomputed on every transfer-function change
