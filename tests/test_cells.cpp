@@ -17,7 +17,9 @@ float linear(Vec3f p) { return 0.5f + 2.f * p.x - 3.f * p.y + 1.5f * p.z; }
 const Box3f kUnitBox{{0.f, 0.f, 0.f}, {1.f, 1.f, 1.f}};
 
 /// A jittered box mesh of one cell type with the linear field.
-Mesh jitteredMesh(CellType type) { return buildMesh(makeBoxGrid(type, 3, kUnitBox, linear, 0.2f, 7), "test"); }
+Mesh jitteredMesh(CellType type) {
+  return buildMesh(makeBoxGrid(type, 3, kUnitBox, linear, 0.2f, 7), "test");
+}
 
 class EveryCellType : public ::testing::TestWithParam<CellType> {};
 

@@ -25,7 +25,8 @@ ColorMap constantMap(float alpha) {
 ColorMap rampMap() {
   ColorMap map;
   map.rgbPoints = {0.f, 0.f, 0.f, 1.f, 0.5f, 0.f, 1.f, 0.f, 1.f, 1.f, 0.f, 0.f};
-  map.opacityPoints = {0.f, 0.f, 0.5f, 0.f, 0.55f, 0.f, 0.5f, 0.f, 0.7f, 0.8f, 0.5f, 0.f, 1.f, 0.9f, 0.5f, 0.f};
+  map.opacityPoints = {0.f,  0.f,  0.5f, 0.f, 0.55f, 0.f,  0.5f, 0.f,
+                       0.7f, 0.8f, 0.5f, 0.f, 1.f,   0.9f, 0.5f, 0.f};
   return map;
 }
 

@@ -22,7 +22,8 @@ void runInfo(const InfoOptions &o) {
   const Mesh mesh = loadMesh(o.mesh);
   const VolumeStats volumes = volumeStats(mesh);
   const Box3f bounds = mesh.bounds();
-  const uint32_t partitions = mesh.cellCount() > 0 ? buildPartitions(makeMeshView(mesh, -1), kDefaultLeafSize).count() : 0;
+  const uint32_t partitions =
+      mesh.cellCount() > 0 ? buildPartitions(makeMeshView(mesh, -1), kDefaultLeafSize).count() : 0;
 
   nlohmann::json fields = nlohmann::json::array();
   for (const ScalarField &field : mesh.fields) {
@@ -42,7 +43,8 @@ void runInfo(const InfoOptions &o) {
         {"pyramid", mesh.pyramidCount()},
         {"skipped", mesh.skippedCells}}},
       {"fields", fields},
-      {"bounds", {bounds.lower.x, bounds.upper.x, bounds.lower.y, bounds.upper.y, bounds.lower.z, bounds.upper.z}},
+      {"bounds",
+       {bounds.lower.x, bounds.upper.x, bounds.lower.y, bounds.upper.y, bounds.lower.z, bounds.upper.z}},
       {"inverted_cells", mesh.invertedCells},
       {"volume_min", volumes.min},
       {"volume_median", volumes.median},
@@ -55,19 +57,20 @@ void runInfo(const InfoOptions &o) {
   }
   std::printf("%s\n", o.mesh.c_str());
   std::printf("  points          %zu\n", mesh.points.size());
-  std::printf("  cells           %llu (tet %llu, hex %llu, wedge %llu, pyramid %llu; skipped %llu "
-              "lower-dimensional)\n",
-              static_cast<unsigned long long>(mesh.cellCount()), static_cast<unsigned long long>(mesh.tetCount()),
-              static_cast<unsigned long long>(mesh.hexCount()), static_cast<unsigned long long>(mesh.wedgeCount()),
-              static_cast<unsigned long long>(mesh.pyramidCount()),
-              static_cast<unsigned long long>(mesh.skippedCells));
+  std::printf(
+      "  cells           %llu (tet %llu, hex %llu, wedge %llu, pyramid %llu; skipped %llu "
+      "lower-dimensional)\n",
+      static_cast<unsigned long long>(mesh.cellCount()), static_cast<unsigned long long>(mesh.tetCount()),
+      static_cast<unsigned long long>(mesh.hexCount()), static_cast<unsigned long long>(mesh.wedgeCount()),
+      static_cast<unsigned long long>(mesh.pyramidCount()),
+      static_cast<unsigned long long>(mesh.skippedCells));
   for (const ScalarField &field : mesh.fields) {
     const ValueRange range = valueRange(field);
     std::printf("  field           %s (%s) [%g, %g]\n", field.name.c_str(),
                 field.centering == Centering::Point ? "point" : "cell", range.min, range.max);
   }
-  std::printf("  bounds          [%g, %g] x [%g, %g] x [%g, %g]\n", bounds.lower.x, bounds.upper.x, bounds.lower.y,
-              bounds.upper.y, bounds.lower.z, bounds.upper.z);
+  std::printf("  bounds          [%g, %g] x [%g, %g] x [%g, %g]\n", bounds.lower.x, bounds.upper.x,
+              bounds.lower.y, bounds.upper.y, bounds.lower.z, bounds.upper.z);
   std::printf("  inverted cells  %llu\n", static_cast<unsigned long long>(mesh.invertedCells));
   std::printf("  cell volume     min %g, median %g, max %g\n", volumes.min, volumes.median, volumes.max);
   std::printf("  partitions      %u (leaf size %u)\n", partitions, kDefaultLeafSize);
@@ -77,7 +80,8 @@ void runInfo(const InfoOptions &o) {
 
 void addInfoCommand(CLI::App &app) {
   auto options = std::make_shared<InfoOptions>();
-  CLI::App *cmd = app.add_subcommand("info", "Describe a mesh: cells, fields, bounds, cell volumes, partitions");
+  CLI::App *cmd =
+      app.add_subcommand("info", "Describe a mesh: cells, fields, bounds, cell volumes, partitions");
   cmd->add_option("MESH", options->mesh, "Mesh file (.vtu, .vtk)")->required();
   cmd->add_flag("--json", options->json, "Print JSON");
   cmd->callback([options] { runInfo(*options); });

@@ -90,26 +90,30 @@ Bvh buildBvh(const MeshView &mesh) {
   // Embree may use the array beyond the primitive count as scratch space.
   std::vector<RTCBuildPrimitive> prims(cellCount);
   Box3f meshBounds;
-  tbb::parallel_for(tbb::blocked_range<uint64_t>(0, cellCount), [&](const tbb::blocked_range<uint64_t> &range) {
-    for (uint64_t c = range.begin(); c < range.end(); ++c) {
-      const Box3f box = cellBounds(mesh, c);
-      prims[c] = {box.lower.x, box.lower.y, box.lower.z, 0, box.upper.x, box.upper.y, box.upper.z, uint32_t(c)};
-    }
-  });
+  tbb::parallel_for(tbb::blocked_range<uint64_t>(0, cellCount),
+                    [&](const tbb::blocked_range<uint64_t> &range) {
+                      for (uint64_t c = range.begin(); c < range.end(); ++c) {
+                        const Box3f box = cellBounds(mesh, c);
+                        prims[c] = {box.lower.x, box.lower.y, box.lower.z, 0,
+                                    box.upper.x, box.upper.y, box.upper.z, uint32_t(c)};
+                      }
+                    });
   for (uint64_t c = 0; c < cellCount; ++c)
     meshBounds.extend(Box3f{{prims[c].lower_x, prims[c].lower_y, prims[c].lower_z},
                             {prims[c].upper_x, prims[c].upper_y, prims[c].upper_z}});
 
   RTCDevice device = rtcNewDevice(nullptr);
   if (!device)
-    throw Error("cannot create an Embree device (error " + std::to_string(int(rtcGetDeviceError(nullptr))) + ")");
+    throw Error("cannot create an Embree device (error " + std::to_string(int(rtcGetDeviceError(nullptr))) +
+                ")");
   RTCBVH handle = rtcNewBVH(device);
   Progress progress("building point-location hierarchy", 1000);
 
   RTCBuildArguments args = rtcDefaultBuildArguments();
   args.byteSize = sizeof(args);
   args.buildFlags = RTC_BUILD_FLAG_NONE;
-  args.buildQuality = RTC_BUILD_QUALITY_LOW; // Morton build: several times faster; good enough to seed the walk
+  args.buildQuality =
+      RTC_BUILD_QUALITY_LOW; // Morton build: several times faster; good enough to seed the walk
   args.maxBranchingFactor = 2;
   args.maxDepth = 64;
   args.sahBlockSize = 1;

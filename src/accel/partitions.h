@@ -1,5 +1,5 @@
-// The paper's partitions (§2.1-2.2): leaves of a median-split KD-tree, convex and disjoint, each box shrunk to
-// the cells it holds, with the scalar range of those cells. Flat arrays, usable on host and device.
+// The paper's partitions (§2.1-2.2): leaves of a median-split KD-tree, convex and disjoint, each box shrunk
+// to the cells it holds, with the scalar range of those cells. Flat arrays, usable on host and device.
 #pragma once
 
 #include "core/host_device.h"

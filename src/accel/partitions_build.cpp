@@ -4,8 +4,8 @@
 #include "core/progress.h"
 #include "mesh/cell.h"
 
-#include <tbb/parallel_for.h>
 #include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
 
 #include <algorithm>
 
@@ -110,25 +110,26 @@ Partitions buildPartitions(const MeshView &mesh, uint32_t leafSize) {
 
   Progress progress("building partitions", cellCount);
   std::vector<CellInfo> cells(cellCount);
-  tbb::parallel_for(tbb::blocked_range<uint64_t>(0, cellCount), [&](const tbb::blocked_range<uint64_t> &range) {
-    for (uint64_t c = range.begin(); c < range.end(); ++c) {
-      CellInfo &info = cells[c];
-      info.bounds = cellBounds(mesh, c);
-      if (!mesh.values) {
-        info.valueMin = info.valueMax = 0.f; // geometry alone, e.g. to count partitions
-      } else if (mesh.cellCentered) {
-        info.valueMin = info.valueMax = mesh.values[c];
-      } else {
-        info.valueMin = INFINITY;
-        info.valueMax = -INFINITY;
-        forEachCellVertex(mesh, c, [&](uint32_t v) {
-          // fminf/fmaxf skip NaN, so one NaN vertex cannot poison the range.
-          info.valueMin = fminf(info.valueMin, mesh.values[v]);
-          info.valueMax = fmaxf(info.valueMax, mesh.values[v]);
-        });
-      }
-    }
-  });
+  tbb::parallel_for(tbb::blocked_range<uint64_t>(0, cellCount),
+                    [&](const tbb::blocked_range<uint64_t> &range) {
+                      for (uint64_t c = range.begin(); c < range.end(); ++c) {
+                        CellInfo &info = cells[c];
+                        info.bounds = cellBounds(mesh, c);
+                        if (!mesh.values) {
+                          info.valueMin = info.valueMax = 0.f; // geometry alone, e.g. to count partitions
+                        } else if (mesh.cellCentered) {
+                          info.valueMin = info.valueMax = mesh.values[c];
+                        } else {
+                          info.valueMin = INFINITY;
+                          info.valueMax = -INFINITY;
+                          forEachCellVertex(mesh, c, [&](uint32_t v) {
+                            // fminf/fmaxf skip NaN, so one NaN vertex cannot poison the range.
+                            info.valueMin = fminf(info.valueMin, mesh.values[v]);
+                            info.valueMax = fmaxf(info.valueMax, mesh.values[v]);
+                          });
+                        }
+                      }
+                    });
 
   Box3f root;
   for (const CellInfo &info : cells)
@@ -155,12 +156,13 @@ Partitions buildPartitions(const MeshView &mesh, uint32_t leafSize) {
   const uint32_t leafCount = parts.count();
   tbb::enumerable_thread_specific<std::vector<LeafAccumulator>> perThread(
       [&] { return std::vector<LeafAccumulator>(leafCount); });
-  tbb::parallel_for(tbb::blocked_range<uint64_t>(0, cellCount), [&](const tbb::blocked_range<uint64_t> &range) {
-    std::vector<LeafAccumulator> &leaves = perThread.local();
-    for (uint64_t c = range.begin(); c < range.end(); ++c)
-      addToLeaves(parts, cells[c], leaves);
-    progress.advance(range.size());
-  });
+  tbb::parallel_for(tbb::blocked_range<uint64_t>(0, cellCount),
+                    [&](const tbb::blocked_range<uint64_t> &range) {
+                      std::vector<LeafAccumulator> &leaves = perThread.local();
+                      for (uint64_t c = range.begin(); c < range.end(); ++c)
+                        addToLeaves(parts, cells[c], leaves);
+                      progress.advance(range.size());
+                    });
   std::vector<LeafAccumulator> leaves(leafCount);
   for (const std::vector<LeafAccumulator> &local : perThread)
     for (uint32_t i = 0; i < leafCount; ++i)

@@ -24,7 +24,8 @@ void Progress::report(uint64_t done) {
   if (!enabled_)
     return;
   const int64_t nowMs =
-      std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::steady_clock::now() - start_).count();
+      std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::steady_clock::now() - start_)
+          .count();
   int64_t last = lastDrawMs_.load();
   // Only long work is worth a line; then redraw every 200 ms from one thread at a time.
   if (nowMs < 500 || nowMs - last < 200 || !lastDrawMs_.compare_exchange_strong(last, nowMs))

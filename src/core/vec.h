@@ -30,8 +30,12 @@ UVR_HOST_DEVICE inline Vec3f normalize(Vec3f a) { return a / length(a); }
 UVR_HOST_DEVICE inline float minf(float a, float b) { return a < b ? a : b; }
 UVR_HOST_DEVICE inline float maxf(float a, float b) { return a > b ? a : b; }
 UVR_HOST_DEVICE inline float clampf(float v, float lo, float hi) { return minf(maxf(v, lo), hi); }
-UVR_HOST_DEVICE inline Vec3f vmin(Vec3f a, Vec3f b) { return {minf(a.x, b.x), minf(a.y, b.y), minf(a.z, b.z)}; }
-UVR_HOST_DEVICE inline Vec3f vmax(Vec3f a, Vec3f b) { return {maxf(a.x, b.x), maxf(a.y, b.y), maxf(a.z, b.z)}; }
+UVR_HOST_DEVICE inline Vec3f vmin(Vec3f a, Vec3f b) {
+  return {minf(a.x, b.x), minf(a.y, b.y), minf(a.z, b.z)};
+}
+UVR_HOST_DEVICE inline Vec3f vmax(Vec3f a, Vec3f b) {
+  return {maxf(a.x, b.x), maxf(a.y, b.y), maxf(a.z, b.z)};
+}
 
 struct Vec4f {
   float x = 0.f, y = 0.f, z = 0.f, w = 0.f;

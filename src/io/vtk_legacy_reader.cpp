@@ -3,11 +3,8 @@
 // Keyword lines are read whole (in BINARY files the data starts right after the line's newline); values are
 // read as whitespace-separated text or as packed big-endian binary.
 #include "core/error.h"
+#include "io/file_buffer.h"
 #include "io/mesh_io.h"
-
-#include <fcntl.h>
-#include <sys/stat.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <array>
@@ -23,40 +20,6 @@
 namespace uvr {
 
 namespace {
-
-struct FileBuffer {
-  std::unique_ptr<char[]> data;
-  uint64_t size = 0;
-};
-
-FileBuffer loadFile(const std::string &path) {
-  int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-  if (fd < 0)
-    throw Error(path, "", std::string("cannot open file: ") + std::strerror(errno));
-  struct stat info {};
-  if (::fstat(fd, &info) != 0 || !S_ISREG(info.st_mode)) {
-    ::close(fd);
-    throw Error(path, "", "cannot open file: not a regular file");
-  }
-  FileBuffer file;
-  file.size = uint64_t(info.st_size);
-  file.data = std::make_unique_for_overwrite<char[]>(file.size + 1);
-  uint64_t done = 0;
-  while (done < file.size) {
-    ssize_t got = ::read(fd, file.data.get() + done, file.size - done);
-    if (got < 0 && errno == EINTR)
-      continue;
-    if (got <= 0) {
-      std::string why = got < 0 ? std::strerror(errno) : "file shrank while reading";
-      ::close(fd);
-      throw Error(path, "", "cannot read file: " + why);
-    }
-    done += uint64_t(got);
-  }
-  ::close(fd);
-  file.data[file.size] = 0;
-  return file;
-}
 
 bool isSpace(char c) { return c == ' ' || c == '\n' || c == '\r' || c == '\t'; }
 
@@ -196,8 +159,7 @@ using Line = std::vector<std::string_view>;
 class LegacyReader {
 public:
   explicit LegacyReader(const std::string &path)
-      : path_(path), file_(loadFile(path)), begin_(file_.data.get()), pos_(begin_),
-        end_(begin_ + file_.size) {}
+      : path_(path), file_(readFile(path)), begin_(file_.chars()), pos_(begin_), end_(begin_ + file_.size) {}
 
   UnstructuredGrid read() {
     std::string_view version = rawLine();

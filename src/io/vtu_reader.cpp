@@ -3,6 +3,7 @@
 // Only the XML head is given to pugixml: appended raw data can hold any byte, so the text up to the '_'
 // marker of <AppendedData> is parsed alone and each appended array is read at its `offset` after the marker.
 #include "core/error.h"
+#include "io/file_buffer.h"
 #include "io/mesh_io.h"
 
 #include <pugixml.hpp>
@@ -10,10 +11,6 @@
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 #include <zlib.h>
-
-#include <fcntl.h>
-#include <sys/stat.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <array>
@@ -33,40 +30,6 @@ namespace {
 using Bytes = std::unique_ptr<uint8_t[]>;
 
 Bytes allocateBytes(uint64_t size) { return std::make_unique_for_overwrite<uint8_t[]>(size); }
-
-struct FileBuffer {
-  Bytes data; ///< the whole file plus a terminating zero
-  uint64_t size = 0;
-};
-
-FileBuffer loadFile(const std::string &path) {
-  int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-  if (fd < 0)
-    throw Error(path, "", std::string("cannot open file: ") + std::strerror(errno));
-  struct stat info {};
-  if (::fstat(fd, &info) != 0 || !S_ISREG(info.st_mode)) {
-    ::close(fd);
-    throw Error(path, "", "cannot open file: not a regular file");
-  }
-  FileBuffer file;
-  file.size = uint64_t(info.st_size);
-  file.data = allocateBytes(file.size + 1);
-  uint64_t done = 0;
-  while (done < file.size) {
-    ssize_t got = ::read(fd, file.data.get() + done, file.size - done);
-    if (got < 0 && errno == EINTR)
-      continue;
-    if (got <= 0) {
-      std::string why = got < 0 ? std::strerror(errno) : "file shrank while reading";
-      ::close(fd);
-      throw Error(path, "", "cannot read file: " + why);
-    }
-    done += uint64_t(got);
-  }
-  ::close(fd);
-  file.data[file.size] = 0;
-  return file;
-}
 
 bool multiplyOverflows(uint64_t a, uint64_t b, uint64_t &product) {
   return __builtin_mul_overflow(a, b, &product);
@@ -336,7 +299,7 @@ constexpr uint64_t maxZlibRatio = 1032;
 
 class VtuReader {
 public:
-  explicit VtuReader(const std::string &path) : path_(path), file_(loadFile(path)) {}
+  explicit VtuReader(const std::string &path) : path_(path), file_(readFile(path)) {}
 
   UnstructuredGrid read() {
     parseXml();

@@ -1,6 +1,6 @@
 // Point location inside one cell and interpolation of the field there, for the four VTK volume cell types.
-// Tetrahedra are linear (barycentric); hexahedra, wedges and pyramids use VTK's isoparametric shape functions,
-// inverted by Newton iteration.
+// Tetrahedra are linear (barycentric); hexahedra, wedges and pyramids use VTK's isoparametric shape
+// functions, inverted by Newton iteration.
 #pragma once
 
 #include "core/host_device.h"
@@ -186,8 +186,8 @@ UVR_HOST_DEVICE inline CellType cellType(const MeshView &mesh, uint64_t cell) {
 }
 
 template <int N>
-UVR_HOST_DEVICE inline bool sampleIsoparametric(const MeshView &mesh, const uint32_t *v, uint64_t cell, Vec3f p,
-                                                float &value) {
+UVR_HOST_DEVICE inline bool sampleIsoparametric(const MeshView &mesh, const uint32_t *v, uint64_t cell,
+                                                Vec3f p, float &value) {
   ShapeFunctions<N> s;
   if (!isoparametricWeights<N>(mesh.points, v, p, s))
     return false;
@@ -210,8 +210,8 @@ UVR_HOST_DEVICE inline bool sampleCell(const MeshView &mesh, uint64_t cell, Vec3
     if (!tetWeights(mesh.points[v[0]], mesh.points[v[1]], mesh.points[v[2]], mesh.points[v[3]], p, w))
       return false;
     value = mesh.cellCentered ? mesh.values[cell]
-                              : w[0] * mesh.values[v[0]] + w[1] * mesh.values[v[1]] + w[2] * mesh.values[v[2]] +
-                                    w[3] * mesh.values[v[3]];
+                              : w[0] * mesh.values[v[0]] + w[1] * mesh.values[v[1]] +
+                                    w[2] * mesh.values[v[2]] + w[3] * mesh.values[v[3]];
     return true;
   }
   local -= mesh.tetCount;
@@ -225,7 +225,8 @@ UVR_HOST_DEVICE inline bool sampleCell(const MeshView &mesh, uint64_t cell, Vec3
 }
 
 /// Calls `visit(point)` for each corner point of `cell`.
-template <typename Visit> UVR_HOST_DEVICE void forEachCellVertex(const MeshView &mesh, uint64_t cell, Visit &&visit) {
+template <typename Visit>
+UVR_HOST_DEVICE void forEachCellVertex(const MeshView &mesh, uint64_t cell, Visit &&visit) {
   const uint32_t *v;
   int n;
   uint64_t local = cell;

@@ -49,14 +49,12 @@ bool volumeKind(uint8_t vtkType, CellKind &kind) {
 /// VTK's 0-, 1- and 2-dimensional cell types (linear, quadratic, Lagrange, Bezier), skipped by a volume
 /// renderer.
 bool lowerDimensional(uint8_t vtkType) {
-  switch (vtkType) {
-  case 1: case 2: case 3: case 4: case 5: case 6: case 7: case 8: case 9:  // vertex .. quad
-  case 21: case 22: case 23: case 28: case 30: case 34: case 35: case 36: // quadratic edge .. polygon
-  case 68: case 69: case 70: case 75: case 76: case 77:                   // Lagrange, Bezier
-    return true;
-  default:
-    return false;
-  }
+  constexpr uint8_t kTypes[] = {
+      1,  2,  3,  4,  5,  6,  7,  8,  9, // vertex .. quad
+      21, 22, 23, 28, 30, 34, 35, 36,    // quadratic edge .. quadratic polygon
+      68, 69, 70, 75, 76, 77,            // Lagrange and Bezier curves, triangles, quads
+  };
+  return std::find(std::begin(kTypes), std::end(kTypes), vtkType) != std::end(kTypes);
 }
 
 float orientedVolume(Vec3f a, Vec3f b, Vec3f c, Vec3f d) { return dot(b - a, cross(c - a, d - a)); }
@@ -170,7 +168,8 @@ Mesh buildMesh(UnstructuredGrid &&grid, const std::string &source) {
     } else if (lowerDimensional(vtkType)) {
       ++mesh.skippedCells;
     } else {
-      throw Error(source, "cell " + std::to_string(c), "unsupported VTK cell type " + std::to_string(vtkType));
+      throw Error(source, "cell " + std::to_string(c),
+                  "unsupported VTK cell type " + std::to_string(vtkType));
     }
   }
   if (grid.points.size() > UINT32_MAX)
@@ -215,16 +214,18 @@ Mesh buildMesh(UnstructuredGrid &&grid, const std::string &source) {
   for (ScalarField &field : grid.fields) {
     if (field.centering == Centering::Cell) {
       if (field.values.size() != cellCount)
-        throw Error(source, "", "cell field '" + field.name + "' has " + std::to_string(field.values.size()) +
-                                    " values for " + std::to_string(cellCount) + " cells");
+        throw Error(source, "",
+                    "cell field '" + field.name + "' has " + std::to_string(field.values.size()) +
+                        " values for " + std::to_string(cellCount) + " cells");
       std::vector<float> reordered(mesh.cellCount());
       for (size_t c = 0; c < cellCount; ++c)
         if (fileToMesh[c] != UINT64_MAX)
           reordered[fileToMesh[c]] = field.values[c];
       field.values = std::move(reordered);
     } else if (field.values.size() != mesh.points.size()) {
-      throw Error(source, "", "point field '" + field.name + "' has " + std::to_string(field.values.size()) +
-                                  " values for " + std::to_string(mesh.points.size()) + " points");
+      throw Error(source, "",
+                  "point field '" + field.name + "' has " + std::to_string(field.values.size()) +
+                      " values for " + std::to_string(mesh.points.size()) + " points");
     }
     mesh.fields.push_back(std::move(field));
   }

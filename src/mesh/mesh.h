@@ -58,8 +58,8 @@ struct Mesh {
   int findField(const std::string &name) const;
 };
 
-/// Reorders the corners `v` of a cell of `type` so that it is wound as VTK expects (positive volume; VTK's wedge
-/// base faces away from its top). Returns whether it was inverted.
+/// Reorders the corners `v` of a cell of `type` so that it is wound as VTK expects (positive volume; VTK's
+/// wedge base faces away from its top). Returns whether it was inverted.
 bool orientCell(CellType type, uint32_t *v, const std::vector<Vec3f> &points);
 
 /// Groups the volume cells of `grid` by type, fixes their winding and reorders cell fields to match.

@@ -12,7 +12,9 @@ namespace uvr {
 
 namespace {
 
-double tetVolume(Vec3f a, Vec3f b, Vec3f c, Vec3f d) { return std::fabs(double(det3(b - a, c - a, d - a))) / 6.0; }
+double tetVolume(Vec3f a, Vec3f b, Vec3f c, Vec3f d) {
+  return std::fabs(double(det3(b - a, c - a, d - a))) / 6.0;
+}
 
 /// Integral of |det J| by a quadrature rule exact for the trilinear hexahedron and the linear wedge.
 template <int N>

@@ -22,8 +22,8 @@ struct ValueRange {
 /// Range of a field's finite values; {0, 0} when it has none.
 ValueRange valueRange(const ScalarField &field);
 
-/// The default step s1: the edge of a cube of the median cell volume, about half a typical tet's edge, so that
-/// a ray takes about two samples per cell it crosses.
+/// The default step s1: the edge of a cube of the median cell volume, about half a typical tet's edge, so
+/// that a ray takes about two samples per cell it crosses.
 float defaultStepSize(const VolumeStats &volumes);
 
 } // namespace uvr

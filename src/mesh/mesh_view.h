@@ -1,4 +1,5 @@
-// A plain, pointer-and-count view of a mesh and one of its fields: what the integrator reads on host and device.
+// A plain, pointer-and-count view of a mesh and one of its fields: what the integrator reads on host and
+// device.
 #pragma once
 
 #include "core/vec.h"

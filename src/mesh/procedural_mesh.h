@@ -7,10 +7,11 @@
 
 namespace uvr {
 
-/// An n x n x n lattice over `box`, each lattice cube cut into cells of `type` (6 Kuhn tetrahedra, 1 hexahedron,
-/// 2 wedges, or 6 pyramids around an added centre point), all wound as VTK expects. Interior lattice points
-/// are moved by up to `jitter` of a cube's edge (seeded) so that cells are not affine images of each other.
-/// One point field "f" holds `field` at every point, one cell field "f_cell" holds it at each cell centroid.
+/// An n x n x n lattice over `box`, each lattice cube cut into cells of `type` (6 Kuhn tetrahedra, 1
+/// hexahedron, 2 wedges, or 6 pyramids around an added centre point), all wound as VTK expects. Interior
+/// lattice points are moved by up to `jitter` of a cube's edge (seeded) so that cells are not affine images
+/// of each other. One point field "f" holds `field` at every point, one cell field "f_cell" holds it at each
+/// cell centroid.
 UnstructuredGrid makeBoxGrid(CellType type, int n, const Box3f &box, const std::function<float(Vec3f)> &field,
                              float jitter = 0.f, unsigned seed = 1);
 

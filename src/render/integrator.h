@@ -1,5 +1,5 @@
-// The ray integrator shared by every backend: emission-absorption ray marching with the paper's space skipping
-// (§2.3) and adaptive sampling (§2.4). Plain data in, no virtual calls, no exceptions.
+// The ray integrator shared by every backend: emission-absorption ray marching with the paper's space
+// skipping (§2.3) and adaptive sampling (§2.4). Plain data in, no virtual calls, no exceptions.
 #pragma once
 
 #include "accel/bvh.h"
@@ -88,8 +88,8 @@ struct RayResult {
 };
 
 /// Integrates one ray front to back. Samples lie on the grid t = tEnter + k * s1 fixed along the ray (tEnter:
-/// where it enters the mesh bounds); a partition marched with step s starts at its first grid point, so skipping
-/// alone changes no sample that contributes, and s = s1 reproduces the fixed-step samples exactly.
+/// where it enters the mesh bounds); a partition marched with step s starts at its first grid point, so
+/// skipping alone changes no sample that contributes, and s = s1 reproduces the fixed-step samples exactly.
 /// `hint` is a cell near the ray's first sample (the neighbouring pixel's: rays are coherent), or kNoCell; it
 /// is updated to this ray's first cell.
 UVR_HOST_DEVICE inline RayResult integrateRay(const SceneView &scene, const IntegratorSettings &settings,
@@ -150,8 +150,8 @@ UVR_HOST_DEVICE inline RayResult integrateRay(const SceneView &scene, const Inte
       t0 = b0;
       t1 = b1;
     }
-    const float step = adaptive ? adaptiveStepSize(settings.s1, settings.s2, settings.p, scene.sigma[part])
-                                : settings.s1;
+    const float step =
+        adaptive ? adaptiveStepSize(settings.s1, settings.s2, settings.p, scene.sigma[part]) : settings.s1;
     return march(t0, t1, step);
   });
   return result;

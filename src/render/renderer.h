@@ -70,6 +70,7 @@ private:
 };
 
 /// Draws a frame with all cores: one ray per pixel, composited over `settings.background`.
-void renderCpu(const SceneView &scene, const CameraView &camera, const RenderSettings &settings, Frame &frame);
+void renderCpu(const SceneView &scene, const CameraView &camera, const RenderSettings &settings,
+               Frame &frame);
 
 } // namespace uvr

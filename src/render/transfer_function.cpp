@@ -13,8 +13,8 @@ namespace uvr {
 TransferFunction::TransferFunction(const ColorMap &map, float valueMin, float valueMax, int tableSize)
     : table_(sampleColorMap(map, std::max(tableSize, 2))), valueMin_(valueMin), valueMax_(valueMax) {
   if (!(valueMax >= valueMin) || !std::isfinite(valueMin) || !std::isfinite(valueMax))
-    throw Error("invalid transfer-function range [" + std::to_string(valueMin) + ", " + std::to_string(valueMax) +
-                "]");
+    throw Error("invalid transfer-function range [" + std::to_string(valueMin) + ", " +
+                std::to_string(valueMax) + "]");
   const size_t n = table_.size();
   prefixSum_.assign(4 * (n + 1), 0.0);
   prefixSquares_.assign(4 * (n + 1), 0.0);
