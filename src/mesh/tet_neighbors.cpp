@@ -1,5 +1,7 @@
 #include "mesh/tet_neighbors.h"
 
+#include "core/progress.h"
+
 #include <tbb/parallel_for.h>
 
 namespace uvr {
@@ -24,6 +26,7 @@ std::vector<uint32_t> buildTetNeighbors(const Mesh &mesh) {
   // Incidence rows come out sorted (tets are visited in order), so the tets sharing a face are found by
   // merging two rows and checking the third point.
   std::vector<uint32_t> neighbors(4 * tetCount, 0xffffffffu);
+  Progress progress("building tet adjacency", tetCount);
   tbb::parallel_for(tbb::blocked_range<uint64_t>(0, tetCount),
                     [&](const tbb::blocked_range<uint64_t> &range) {
                       for (uint64_t t = range.begin(); t < range.end(); ++t) {
@@ -49,7 +52,9 @@ std::vector<uint32_t> buildTetNeighbors(const Mesh &mesh) {
                           }
                         }
                       }
+                      progress.advance(range.size());
                     });
+  progress.finish();
   return neighbors;
 }
 
