@@ -141,7 +141,7 @@ Bvh buildBvh(const MeshView &mesh) {
   }
 
   Bvh bvh;
-  bvh.nodes.reserve(2 * cellCount / 2 + 1);
+  bvh.nodes.reserve(cellCount); // about 2 * cells / (cells per leaf) nodes
   bvh.cellIds.reserve(cellCount);
   bvh.nodes.resize(1);
   flatten(root, meshBounds, 0, bvh);
