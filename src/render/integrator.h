@@ -3,6 +3,7 @@
 #pragma once
 
 #include "accel/bvh.h"
+#include "accel/occupancy.h"
 #include "accel/partitions.h"
 #include "core/host_device.h"
 #include "mesh/cell.h"
@@ -30,10 +31,12 @@ struct IntegratorSettings {
 struct SceneView {
   MeshView mesh;
   BvhView bvh;
+  OccupancyView occupancy;
   const uint32_t *tetNeighbors = nullptr; ///< 4 per tet; see buildTetNeighbors
   PartitionsView partitions;
-  const float *maxOpacity = nullptr; ///< per partition, for the current transfer function
-  const float *sigma = nullptr;      ///< per partition, normalised colour deviation
+  const float *maxOpacity = nullptr;     ///< per partition, for the current transfer function
+  const float *nodeMaxOpacity = nullptr; ///< per KD node, the maximum over the partitions below
+  const float *sigma = nullptr;          ///< per partition, normalised colour deviation
   TransferFunctionView tf;
 };
 
@@ -65,6 +68,8 @@ UVR_HOST_DEVICE inline bool walkTets(const SceneView &scene, Vec3f p, uint32_t &
 
 /// Finds the cell holding `p`, starting from `cell` (the previous sample's), and returns the field there.
 UVR_HOST_DEVICE inline bool locateSample(const SceneView &scene, Vec3f p, uint32_t &cell, float &value) {
+  if (!scene.occupancy.mayHoldCell(p))
+    return false;
   if (cell != kNoCell) {
     if (scene.tetNeighbors && cell < scene.mesh.tetCount) {
       if (walkTets(scene, p, cell, value))
@@ -140,7 +145,8 @@ UVR_HOST_DEVICE inline RayResult integrateRay(const SceneView &scene, const Inte
   }
   const bool skip = settings.mode == RenderMode::Skip || settings.mode == RenderMode::Full;
   const bool adaptive = settings.mode == RenderMode::Adaptive || settings.mode == RenderMode::Full;
-  traversePartitions(scene.partitions, ray, tEnter, tExit, [&](uint32_t part, float t0, float t1) {
+  const float *cull = skip ? scene.nodeMaxOpacity : nullptr;
+  traversePartitions(scene.partitions, ray, tEnter, tExit, cull, [&](uint32_t part, float t0, float t1) {
     if (skip) {
       if (scene.maxOpacity[part] <= 0.f)
         return true;
