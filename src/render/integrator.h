@@ -31,7 +31,7 @@ struct IntegratorSettings {
 struct SceneView {
   MeshView mesh;
   BvhView bvh;
-  OccupancyView occupancy;
+  OccupancyView occupancy; ///< used by the skipping modes
   const uint32_t *tetNeighbors = nullptr; ///< 4 per tet; see buildTetNeighbors
   PartitionsView partitions;
   const float *maxOpacity = nullptr;     ///< per partition, for the current transfer function
@@ -67,8 +67,10 @@ UVR_HOST_DEVICE inline bool walkTets(const SceneView &scene, Vec3f p, uint32_t &
 }
 
 /// Finds the cell holding `p`, starting from `cell` (the previous sample's), and returns the field there.
-UVR_HOST_DEVICE inline bool locateSample(const SceneView &scene, Vec3f p, uint32_t &cell, float &value) {
-  if (!scene.occupancy.mayHoldCell(p))
+/// `occupancy` rejects points in empty space at once; an empty view leaves every point to the walk and BVH.
+UVR_HOST_DEVICE inline bool locateSample(const SceneView &scene, const OccupancyView &occupancy, Vec3f p,
+                                         uint32_t &cell, float &value) {
+  if (!occupancy.mayHoldCell(p))
     return false;
   if (cell != kNoCell) {
     if (scene.tetNeighbors && cell < scene.mesh.tetCount) {
@@ -104,6 +106,11 @@ UVR_HOST_DEVICE inline RayResult integrateRay(const SceneView &scene, const Inte
   if (!intersectBox(ray, scene.partitions.rootBounds, 0.f, INFINITY, tEnter, tExit))
     return result;
 
+  const bool skip = settings.mode == RenderMode::Skip || settings.mode == RenderMode::Full;
+  const bool adaptive = settings.mode == RenderMode::Adaptive || settings.mode == RenderMode::Full;
+  // The occupancy grid skips empty space voxel by voxel: part of space skipping, so the modes without it
+  // locate every sample the plain way, as the paper's reference ray marcher does.
+  const OccupancyView occupancy = skip ? scene.occupancy : OccupancyView{};
   uint32_t cell = hint;
   bool first = true;
   // Marches [ta, tb) with step `step`; false once the ray is opaque.
@@ -117,7 +124,7 @@ UVR_HOST_DEVICE inline RayResult integrateRay(const SceneView &scene, const Inte
     for (float t = tEnter + k * s1; t < tb; k += stride, t = tEnter + k * s1) {
       ++result.samples;
       float value;
-      if (!locateSample(scene, ray.at(t), cell, value))
+      if (!locateSample(scene, occupancy, ray.at(t), cell, value))
         continue;
       if (first) {
         hint = cell;
@@ -143,8 +150,6 @@ UVR_HOST_DEVICE inline RayResult integrateRay(const SceneView &scene, const Inte
     march(tEnter, tExit, settings.s1);
     return result;
   }
-  const bool skip = settings.mode == RenderMode::Skip || settings.mode == RenderMode::Full;
-  const bool adaptive = settings.mode == RenderMode::Adaptive || settings.mode == RenderMode::Full;
   const float *cull = skip ? scene.nodeMaxOpacity : nullptr;
   traversePartitions(scene.partitions, ray, tEnter, tExit, cull, [&](uint32_t part, float t0, float t1) {
     if (skip) {
