@@ -7,6 +7,7 @@ Usage: test_malformed_corpus.py UVR_BINARY SHARED_DATA
 """
 import os
 import re
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -55,6 +56,8 @@ def main():
         run = subprocess.run([uvr, "info", os.path.join(shared, source)], capture_output=True, text=True)
         if run.returncode != 0:
             failures.append(f"{source} does not load: {run.stderr.strip()}")
+    if not shutil.which("ncgen"):
+        failures.append("ncgen (Debian's netcdf-bin) is missing: the Exodus cases cannot be made")
     with tempfile.TemporaryDirectory(prefix="uvr_malformed_") as directory:
         cases = malformed_corpus.generate(shared, directory)
         if len(cases) < 40:
