@@ -286,7 +286,7 @@ def exodus_cases(c, ncgen):
     # The header stores each dimension's name and length: enlarge num_nodes beyond the file.
     name = b"num_nodes\x00\x00\x00" + struct.pack(">i", 8499)
     c.edit("exodus_nodes_huge.ex2", disk, name, b"num_nodes\x00\x00\x00" + struct.pack(">i", 0x7FFFFFF0),
-           "not a readable netCDF file")
+           "the header lays out 77309809184 bytes but the file has 704400")
 
     with open(os.path.join(CDL, "two_blocks.cdl")) as f:
         cdl = f.read()

@@ -20,6 +20,7 @@
 #include <cstring>
 #include <fstream>
 #include <optional>
+#include <string_view>
 #include <sys/stat.h>
 #include <vector>
 
@@ -132,7 +133,9 @@ private:
     version_ = int(take(1));
     if (version_ != 1 && version_ != 2 && version_ != 5)
       ok_ = false;
-    const uint64_t records = count();
+    uint64_t records = count();
+    if (records == (version_ == 5 ? UINT64_MAX : UINT32_MAX))
+      records = 0; // streaming: the record count follows from the file size
     std::vector<uint64_t> dims;
     uint64_t n = 0;
     if (list(0x0A, n))
@@ -242,20 +245,23 @@ private:
     if (::stat(path_.c_str(), &info) != 0 || !S_ISREG(info.st_mode))
       fail("", std::string("cannot open file: ") + (errno ? std::strerror(errno) : "not a regular file"));
     fileSize_ = uint64_t(info.st_size);
+    char magic[4] = {};
+    std::ifstream(path_, std::ios::binary).read(magic, 4);
+    // netCDF-3 headers are checked here first: netCDF allocates what their counts claim before reading.
+    if (std::string_view(magic, 3) == "CDF") {
+      std::optional<uint64_t> end = ClassicHeader::dataEnd(path_, fileSize_);
+      if (!end)
+        fail("netCDF header", "not a readable netCDF file: malformed or truncated netCDF-3 header");
+      if (*end > fileSize_)
+        fail("netCDF header", "the header lays out " + std::to_string(*end) + " bytes but the file has " +
+                                  std::to_string(fileSize_) + " (truncated?)");
+    }
     check(nc_open(path_.c_str(), NC_NOWRITE, &ncid_), "netCDF header", "not a readable netCDF file");
     int format = 0;
     check(nc_inq_format(ncid_, &format), "netCDF header", "not a readable netCDF file");
     // netCDF-3 stores every value uncompressed; netCDF-4 (HDF5) may deflate, at most about 1032:1.
     const bool hdf5 = format == NC_FORMAT_NETCDF4 || format == NC_FORMAT_NETCDF4_CLASSIC;
     compressionLimit_ = hdf5 ? 1100 : 1;
-    if (!hdf5) {
-      std::optional<uint64_t> end = ClassicHeader::dataEnd(path_, fileSize_);
-      if (!end)
-        fail("netCDF header", "malformed netCDF-3 header");
-      if (*end > fileSize_)
-        fail("netCDF header", "the header lays out " + std::to_string(*end) + " bytes but the file has " +
-                                  std::to_string(fileSize_) + " (truncated?)");
-    }
   }
 
   /// A dimension's length; 0 when absent and not `required`.
