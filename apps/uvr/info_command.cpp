@@ -16,10 +16,11 @@ namespace {
 struct InfoOptions {
   std::string mesh;
   bool json = false;
+  int timeStep = 0;
 };
 
 void runInfo(const InfoOptions &o) {
-  const Mesh mesh = loadMesh(o.mesh);
+  const Mesh mesh = loadMesh(o.mesh, {o.timeStep});
   const VolumeStats volumes = volumeStats(mesh);
   const Box3f bounds = mesh.bounds();
   const uint32_t partitions =
@@ -82,8 +83,10 @@ void addInfoCommand(CLI::App &app) {
   auto options = std::make_shared<InfoOptions>();
   CLI::App *cmd =
       app.add_subcommand("info", "Describe a mesh: cells, fields, bounds, cell volumes, partitions");
-  cmd->add_option("MESH", options->mesh, "Mesh file (.vtu, .vtk)")->required();
+  cmd->add_option("MESH", options->mesh, "Mesh file (.vtu, .vtk, .e, .ex2, .exo, .g)")->required();
   cmd->add_flag("--json", options->json, "Print JSON");
+  cmd->add_option("--time-step", options->timeStep, "Time step of an Exodus file, from 0")
+      ->capture_default_str();
   cmd->callback([options] { runInfo(*options); });
 }
 

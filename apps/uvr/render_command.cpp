@@ -39,6 +39,7 @@ struct RenderOptions {
   std::string output;
   std::string heatmap;
   std::string stats;
+  int timeStep = 0;
 };
 
 /// Defaults measured on the brain meshes (README, "Choosing defaults"): s2 = kDefaultS2Factor * s1.
@@ -103,7 +104,7 @@ void runRender(const RenderOptions &o) {
   const RenderMode mode = parseMode(o.mode);
 
   const Timer loadTimer;
-  const Mesh mesh = loadMesh(o.mesh);
+  const Mesh mesh = loadMesh(o.mesh, {o.timeStep});
   const double loadMs = loadTimer.milliseconds();
   if (mesh.skippedCells > 0)
     std::fprintf(stderr, "uvr: %s: skipped %llu lower-dimensional cells\n", o.mesh.c_str(),
@@ -203,7 +204,8 @@ void addRenderCommand(CLI::App &app) {
   auto options = std::make_shared<RenderOptions>();
   RenderOptions &o = *options;
   CLI::App *cmd = app.add_subcommand("render", "Render a mesh to a PNG");
-  cmd->add_option("MESH", o.mesh, "Mesh file (.vtu, .vtk)")->required();
+  cmd->add_option("MESH", o.mesh, "Mesh file (.vtu, .vtk, .e, .ex2, .exo, .g)")->required();
+  cmd->add_option("--time-step", o.timeStep, "Time step of an Exodus file, from 0")->capture_default_str();
   cmd->add_option("--field", o.field, "Scalar field to render (default: the first)");
   cmd->add_option("--tf", o.tf, "Transfer function: a ParaView preset JSON file or a built-in name");
   cmd->add_option("--tf-name", o.tfName, "Preset to take from the --tf file (default: the first)");

@@ -6,7 +6,7 @@
 
 namespace uvr {
 
-Mesh loadMesh(const std::string &path) {
+Mesh loadMesh(const std::string &path, const LoadOptions &options) {
   std::string extension = path.substr(std::min(path.size(), path.find_last_of('.')));
   std::transform(extension.begin(), extension.end(), extension.begin(),
                  [](unsigned char c) { return char(std::tolower(c)); });
@@ -14,7 +14,9 @@ Mesh loadMesh(const std::string &path) {
     return buildMesh(readVtu(path), path);
   if (extension == ".vtk")
     return buildMesh(readVtkLegacy(path), path);
-  throw Error(path, "", "unknown mesh format '" + extension + "': expected .vtu or .vtk");
+  if (extension == ".e" || extension == ".ex2" || extension == ".exo" || extension == ".g")
+    return buildMesh(readExodus(path, options.timeStep), path);
+  throw Error(path, "", "unknown mesh format '" + extension + "': expected .vtu, .vtk, .e, .ex2, .exo or .g");
 }
 
 } // namespace uvr

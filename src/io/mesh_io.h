@@ -15,7 +15,17 @@ UnstructuredGrid readVtu(const std::string &path);
 /// layout; POINT_DATA and CELL_DATA with SCALARS and FIELD arrays.
 UnstructuredGrid readVtkLegacy(const std::string &path);
 
+/// Exodus II (netCDF-3 or netCDF-4): element blocks of volume types merged, nodal variables and element
+/// variables (per block, merged) at time step `timeStep` (0-based). Throws uvr::Error when uvr was built
+/// without netCDF.
+UnstructuredGrid readExodus(const std::string &path, int timeStep);
+
+/// What a load may choose beyond the file: formats with time steps read step `timeStep` (0-based).
+struct LoadOptions {
+  int timeStep = 0;
+};
+
 /// Reads any supported format and builds the mesh. Throws uvr::Error naming the file and position.
-Mesh loadMesh(const std::string &path);
+Mesh loadMesh(const std::string &path, const LoadOptions &options = {});
 
 } // namespace uvr
