@@ -5,16 +5,14 @@
 #include "image/image.h"
 #include "io/mesh_io.h"
 #include "mesh/mesh_stats.h"
+#include "render/render_defaults.h"
 #include "render/renderer.h"
-
-#include <nlohmann/json.hpp>
-#include <tbb/info.h>
 
 #include <algorithm>
 #include <cstdio>
-#include <filesystem>
 #include <fstream>
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <sstream>
 
 namespace uvr {
@@ -41,10 +39,6 @@ struct RenderOptions {
   std::string stats;
 };
 
-/// Defaults measured on the brain meshes (README, "Choosing defaults"): s2 = kDefaultS2Factor * s1.
-constexpr float kDefaultS2Factor = 8.f;
-constexpr float kDefaultP = 4.f;
-
 Vec3f parseVector(const std::string &text, const std::string &option) {
   Vec3f v;
   char c1 = 0, c2 = 0;
@@ -62,31 +56,6 @@ void parseSize(const std::string &text, int &width, int &height) {
     throw Error("--size expects WxH with each side from 1 to 16384, got '" + text + "'");
 }
 
-ColorMap chooseColorMap(const RenderOptions &o) {
-  if (o.tf.empty())
-    return builtinColorMap(builtinColorMapNames().front());
-  if (std::filesystem::exists(o.tf))
-    return readColorMapFile(o.tf, o.tfName);
-  if (o.tf.size() > 5 && o.tf.substr(o.tf.size() - 5) == ".json")
-    throw Error(o.tf, "", "cannot open transfer-function file");
-  return builtinColorMap(o.tf);
-}
-
-int chooseField(const Mesh &mesh, const std::string &name, const std::string &path) {
-  if (mesh.fields.empty())
-    throw Error(path, "", "the mesh has no scalar field to render");
-  if (name.empty())
-    return 0;
-  const int index = mesh.findField(name);
-  if (index < 0) {
-    std::string names;
-    for (const ScalarField &f : mesh.fields)
-      names += (names.empty() ? "" : ", ") + f.name;
-    throw Error(path, "", "no field named '" + name + "'; fields: " + names);
-  }
-  return index;
-}
-
 void writeStats(const std::string &path, const nlohmann::json &stats) {
   std::ofstream out(path);
   out << stats.dump(2) << '\n';
@@ -97,8 +66,8 @@ void writeStats(const std::string &path, const nlohmann::json &stats) {
 void runRender(const RenderOptions &o) {
   int width, height;
   parseSize(o.size, width, height);
-  if (o.backend != "cpu")
-    throw Error("unknown backend '" + o.backend + "': this build has cpu");
+  RenderSettings settings;
+  settings.backend = parseBackend(o.backend);
   if (o.frames < 1)
     throw Error("--frames must be at least 1");
   const RenderMode mode = parseMode(o.mode);
@@ -109,39 +78,28 @@ void runRender(const RenderOptions &o) {
   if (mesh.skippedCells > 0)
     std::fprintf(stderr, "uvr: %s: skipped %llu lower-dimensional cells\n", o.mesh.c_str(),
                  static_cast<unsigned long long>(mesh.skippedCells));
-  if (mesh.cellCount() == 0)
-    throw Error(o.mesh, "", "the file holds no volume cells (tetra, hexahedron, wedge or pyramid)");
   const int fieldIndex = chooseField(mesh, o.field, o.mesh);
 
-  RenderSettings settings;
   settings.width = width;
   settings.height = height;
   settings.background = parseVector(o.background, "background");
-  const float typicalStep = defaultStepSize(volumeStats(mesh));
-  IntegratorSettings &is = settings.integrator;
-  is.mode = mode;
-  is.s1 = o.s1 > 0.f ? o.s1 : typicalStep;
-  is.s2 = o.s2 > 0.f ? o.s2 : std::max(kDefaultS2Factor * typicalStep, is.s1);
-  is.p = o.p > 0.f ? o.p : kDefaultP;
-  is.unit = o.unit > 0.f ? o.unit : typicalStep;
+  settings.integrator = samplingSettings(mode, defaultStepSize(volumeStats(mesh)), o.s1, o.s2, o.p, o.unit);
 
   Renderer renderer(mesh, fieldIndex, o.leafSize);
 
   ValueRange range = valueRange(mesh.fields[size_t(fieldIndex)]);
   if (!o.range.empty())
     range = {o.range[0], o.range[1]};
-  renderer.setTransferFunction(TransferFunction(chooseColorMap(o), range.min, range.max));
+  renderer.setTransferFunction(TransferFunction(chooseColorMap(o.tf, o.tfName), range.min, range.max));
 
-  const Box3f bounds = mesh.bounds();
-  Camera camera = frameBounds(bounds, o.fovy);
+  Camera camera = frameBounds(mesh.bounds(), o.fovy);
   if (!o.at.empty())
     camera.at = parseVector(o.at, "at");
   if (!o.eye.empty())
     camera.eye = parseVector(o.eye, "eye");
   if (!o.up.empty())
     camera.up = parseVector(o.up, "up");
-  if (length(cross(camera.at - camera.eye, camera.up)) == 0.f)
-    throw Error("--eye, --at and --up must not be collinear");
+  checkCamera(camera);
 
   std::vector<double> times;
   Frame frame;
@@ -157,37 +115,14 @@ void runRender(const RenderOptions &o) {
   if (!o.heatmap.empty())
     writePng(o.heatmap, heatmapImage(frame.samplesPerPixel, width, height));
 
-  const double pixels = double(width) * double(height);
-  const bool skipping = mode == RenderMode::Skip || mode == RenderMode::Full;
+  nlohmann::json stats =
+      frameStats(mesh, renderer, settings, frame, renderMs, o.leafSize, fieldIndex, o.backend);
   std::fprintf(stderr, "uvr: %s %dx%d, %llu cells, %u partitions, %.1f samples/pixel, %.1f ms/frame\n",
                modeName(mode), width, height, static_cast<unsigned long long>(mesh.cellCount()),
-               renderer.partitions().count(), double(frame.samplesTotal) / pixels, renderMs);
+               renderer.partitions().count(), stats["samples_per_pixel_mean"].get<double>(), renderMs);
   if (!o.stats.empty()) {
-    nlohmann::json stats = {
-        {"mode", modeName(mode)},
-        {"width", width},
-        {"height", height},
-        {"cells", mesh.cellCount()},
-        {"partitions", renderer.partitions().count()},
-        {"partitions_skipped", skipping ? renderer.metadata().transparentCount : 0},
-        {"samples_total", frame.samplesTotal},
-        {"samples_per_pixel_mean", double(frame.samplesTotal) / pixels},
-        {"samples_per_pixel_max", frame.samplesMax},
-        {"load_ms", loadMs},
-        {"build_ms", renderer.buildMs()},
-        {"tf_update_ms", renderer.tfUpdateMs()},
-        {"render_ms", renderMs},
-        {"frames", o.frames},
-        {"s1", is.s1},
-        {"s2", is.s2},
-        {"p", is.p},
-        {"unit", is.unit},
-        {"leaf_size", o.leafSize},
-        {"field", mesh.fields[size_t(fieldIndex)].name},
-        {"range", {range.min, range.max}},
-        {"backend", o.backend},
-        {"threads", tbb::info::default_concurrency()},
-    };
+    stats["load_ms"] = loadMs;
+    stats["frames"] = o.frames;
     writeStats(o.stats, stats);
   }
 }
