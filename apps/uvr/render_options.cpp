@@ -52,7 +52,7 @@ void addRenderOptions(CLI::App *cmd, RenderOptions &o) {
   cmd->add_option("--up", o.up, "View-up direction X,Y,Z (default: 0,1,0)");
   cmd->add_option("--fovy", o.fovy, "Vertical view angle in degrees")->capture_default_str();
   cmd->add_option("--background", o.background, "Background colour R,G,B in [0, 1]")->capture_default_str();
-  cmd->add_option("--backend", o.backend, "cpu")->capture_default_str();
+  cmd->add_option("--backend", o.backend, "cpu or cuda")->capture_default_str();
 }
 
 LoadedMesh loadForRendering(const RenderOptions &o) {

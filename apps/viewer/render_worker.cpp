@@ -61,10 +61,11 @@ ViewerFrame RenderWorker::draw(const ViewState &state, uint64_t version, int sca
   ViewerFrame result;
   result.scale = scale;
   result.version = version;
+  renderer_.prepare(settings.backend);
   const Timer timer;
   result.frame = renderer_.render(state.camera, settings);
-  result.stats = frameStats(mesh_, renderer_, settings, result.frame, timer.milliseconds(), leafSize_,
-                            fieldIndex_, "cpu");
+  result.stats =
+      frameStats(mesh_, renderer_, settings, result.frame, timer.milliseconds(), leafSize_, fieldIndex_);
   return result;
 }
 

@@ -235,8 +235,8 @@ def test_render_releases_the_gil():
     (["render", DISK, "--tf", "missing.json", "-o", "x.png"], lambda: uvr.TransferFunction("missing.json")),
     (["render", DISK, "--tf", PRESETS, "--tf-name", "Nope", "-o", "x.png"],
      lambda: uvr.TransferFunction(PRESETS, name="Nope")),
-    (["render", DISK, "--backend", "cuda", "-o", "x.png"],
-     lambda: uvr.Renderer(uvr.load(DISK), backend="cuda")),
+    (["render", DISK, "--backend", "metal", "-o", "x.png"],
+     lambda: uvr.Renderer(uvr.load(DISK), backend="metal")),
     (["render", DISK, "--eye", "0,1,0", "--at", "0,0,0", "--up", "0,1,0", "-o", "x.png"],
      lambda: uvr.Renderer(uvr.load(DISK)).render(camera={"eye": (0, 1, 0), "at": (0, 0, 0), "up": (0, 1, 0)},
                                                  size=(8, 8))),
@@ -249,6 +249,24 @@ def test_errors_carry_the_command_messages(tmp_path, cli_args, call):
     with pytest.raises(uvr.Error) as error:
         call()
     assert str(error.value) == message
+
+
+def test_cuda_backend_as_the_command(tmp_path):
+    """Whatever this build and machine have, the module does what the command does: fails with its message
+    (no CUDA at build time, or no GPU) or renders the same image."""
+    png = tmp_path / "cuda.png"
+    result = run_cli("render", DISK, "--backend", "cuda", "--size", "64x64", "-o", str(png))
+    if result.returncode != 0:
+        assert result.returncode == 2, result.stderr
+        message = result.stderr.strip().splitlines()[-1].removeprefix("uvr: error: ")
+        with pytest.raises(uvr.Error) as error:
+            uvr.Renderer(uvr.load(DISK), backend="cuda").render(size=(64, 64))
+        assert str(error.value) == message
+    else:
+        renderer = uvr.Renderer(uvr.load(DISK), backend="cuda")
+        image = renderer.render(size=(64, 64))
+        assert uvr.compare(image, uvr.read_png(str(png)))["ssim"] >= 0.999
+        assert renderer.last_stats["backend"] == "cuda"
 
 
 def test_input_errors():

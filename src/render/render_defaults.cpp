@@ -9,12 +9,6 @@
 
 namespace uvr {
 
-Backend parseBackend(const std::string &name) {
-  if (name != "cpu")
-    throw Error("unknown backend '" + name + "': this build has cpu");
-  return Backend::Cpu;
-}
-
 int chooseField(const Mesh &mesh, const std::string &name, const std::string &source) {
   if (mesh.cellCount() == 0)
     throw Error(source, "", "the file holds no volume cells (tetra, hexahedron, wedge or pyramid)");
@@ -59,12 +53,11 @@ void checkCamera(const Camera &camera) {
 }
 
 nlohmann::json frameStats(const Mesh &mesh, const Renderer &renderer, const RenderSettings &settings,
-                          const Frame &frame, double renderMs, uint32_t leafSize, int fieldIndex,
-                          const std::string &backend) {
+                          const Frame &frame, double renderMs, uint32_t leafSize, int fieldIndex) {
   const IntegratorSettings &is = settings.integrator;
   const double pixels = double(settings.width) * double(settings.height);
   const bool skipping = is.mode == RenderMode::Skip || is.mode == RenderMode::Full;
-  return {
+  nlohmann::json stats = {
       {"mode", modeName(is.mode)},
       {"width", settings.width},
       {"height", settings.height},
@@ -84,9 +77,14 @@ nlohmann::json frameStats(const Mesh &mesh, const Renderer &renderer, const Rend
       {"leaf_size", leafSize},
       {"field", mesh.fields[size_t(fieldIndex)].name},
       {"range", {renderer.transferFunction().valueMin(), renderer.transferFunction().valueMax()}},
-      {"backend", backend},
+      {"backend", backendName(settings.backend)},
       {"threads", tbb::info::default_concurrency()},
   };
+  if (settings.backend == Backend::Cuda) {
+    stats["device"] = renderer.deviceName();
+    stats["gpu_memory_bytes"] = renderer.deviceMemoryBytes();
+  }
+  return stats;
 }
 
 } // namespace uvr

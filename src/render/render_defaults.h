@@ -17,9 +17,6 @@ namespace uvr {
 constexpr float kDefaultS2Factor = 8.f;
 constexpr float kDefaultP = 4.f;
 
-/// Parses a --backend name; throws uvr::Error naming the backends this build has.
-Backend parseBackend(const std::string &name);
-
 /// Checks that `mesh` holds volume cells and a scalar field, and returns the index of the field `name` (the
 /// first field when empty). Errors name `source` and list the fields.
 int chooseField(const Mesh &mesh, const std::string &name, const std::string &source);
@@ -38,7 +35,6 @@ void checkCamera(const Camera &camera);
 
 /// The statistics of one frame under the keys of `uvr render --stats` (all but load_ms and frames).
 nlohmann::json frameStats(const Mesh &mesh, const Renderer &renderer, const RenderSettings &settings,
-                          const Frame &frame, double renderMs, uint32_t leafSize, int fieldIndex,
-                          const std::string &backend);
+                          const Frame &frame, double renderMs, uint32_t leafSize, int fieldIndex);
 
 } // namespace uvr
