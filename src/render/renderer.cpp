@@ -68,6 +68,12 @@ void Renderer::setTransferFunction(TransferFunction tf) {
   tfUpdateMs_ = timer.milliseconds();
 }
 
+const TransferFunction &Renderer::transferFunction() const {
+  if (!tf_)
+    throw Error("no transfer function set");
+  return *tf_;
+}
+
 SceneView Renderer::sceneView() const {
   SceneView scene;
   scene.mesh = meshView_;

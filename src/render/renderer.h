@@ -70,6 +70,8 @@ public:
   const Partitions &partitions() const { return partitions_; }
   const Bvh &bvh() const { return bvh_; }
   const PartitionMetadata &metadata() const { return metadata_; }
+  /// The current transfer function; throws uvr::Error before the first setTransferFunction.
+  const TransferFunction &transferFunction() const;
   double buildMs() const { return buildMs_; }
   double tfUpdateMs() const { return tfUpdateMs_; }
 
