@@ -83,6 +83,7 @@ nlohmann::json frameStats(const Mesh &mesh, const Renderer &renderer, const Rend
   if (settings.backend == Backend::Cuda) {
     stats["device"] = renderer.deviceName();
     stats["gpu_memory_bytes"] = renderer.deviceMemoryBytes();
+    stats["gpu_scene_bytes"] = renderer.deviceSceneBytes();
   }
   return stats;
 }

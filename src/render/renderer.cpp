@@ -113,6 +113,7 @@ void Renderer::prepare(Backend backend) const {
 
 std::string Renderer::deviceName() const { return cuda_ ? std::string(cuda_->deviceName()) : std::string(); }
 size_t Renderer::deviceMemoryBytes() const { return cuda_ ? cuda_->memoryBytes() : 0; }
+size_t Renderer::deviceSceneBytes() const { return cuda_ ? cuda_->sceneBytes() : 0; }
 
 Frame Renderer::render(const Camera &camera, const RenderSettings &settings) const {
   if (!tf_)

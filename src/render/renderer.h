@@ -66,6 +66,7 @@ public:
   /// The GPU's name and the device memory this renderer holds; empty and 0 until CUDA has been prepared.
   std::string deviceName() const;
   size_t deviceMemoryBytes() const;
+  size_t deviceSceneBytes() const; ///< without the frame buffers
 
   const Partitions &partitions() const { return partitions_; }
   const Bvh &bvh() const { return bvh_; }

@@ -164,11 +164,15 @@ void CudaRenderer::render(const CameraView &camera, const IntegratorSettings &se
 
 size_t CudaRenderer::memoryBytes() const {
   const Impl &d = *impl_;
+  return sceneBytes() + d.rgb.bytes() + d.opacity.bytes() + d.samples.bytes();
+}
+
+size_t CudaRenderer::sceneBytes() const {
+  const Impl &d = *impl_;
   return d.points.bytes() + d.tets.bytes() + d.pyramids.bytes() + d.wedges.bytes() + d.hexes.bytes() +
          d.tetNeighbors.bytes() + d.bvhCellIds.bytes() + d.values.bytes() + d.maxOpacity.bytes() +
          d.nodeMaxOpacity.bytes() + d.sigma.bytes() + d.bvhNodes.bytes() + d.kdNodes.bytes() +
-         d.nodeBounds.bytes() + d.partitionBounds.bytes() + d.occupancy.bytes() + d.tfTable.bytes() +
-         d.rgb.bytes() + d.opacity.bytes() + d.samples.bytes();
+         d.nodeBounds.bytes() + d.partitionBounds.bytes() + d.occupancy.bytes() + d.tfTable.bytes();
 }
 
 const std::string &CudaRenderer::deviceName() const { return impl_->deviceName; }

@@ -33,6 +33,9 @@ public:
   void render(const CameraView &camera, const IntegratorSettings &settings, const PixelTarget &target,
               int height);
 
+  /// Device memory held: the scene alone (mesh, field, acceleration, partitions, transfer function), and all
+  /// of it including the frame buffers.
+  size_t sceneBytes() const;
   size_t memoryBytes() const;
   const std::string &deviceName() const;
 
