@@ -35,6 +35,7 @@ struct RenderOptions {
   float fovy = 30.f;
   std::string background = "0,0,0";
   int frames = 1;
+  int timeStep = 0;
   std::string backend = "cpu";
   std::string output;
   std::string heatmap;
@@ -104,7 +105,7 @@ void runRender(const RenderOptions &o) {
   const RenderMode mode = parseMode(o.mode);
 
   const Timer loadTimer;
-  const Mesh mesh = loadMesh(o.mesh);
+  const Mesh mesh = loadMesh(o.mesh, {o.timeStep});
   const double loadMs = loadTimer.milliseconds();
   if (mesh.skippedCells > 0)
     std::fprintf(stderr, "uvr: %s: skipped %llu lower-dimensional cells\n", o.mesh.c_str(),
@@ -174,6 +175,7 @@ void runRender(const RenderOptions &o) {
         {"samples_per_pixel_mean", double(frame.samplesTotal) / pixels},
         {"samples_per_pixel_max", frame.samplesMax},
         {"load_ms", loadMs},
+        {"time_step", o.timeStep},
         {"build_ms", renderer.buildMs()},
         {"tf_update_ms", renderer.tfUpdateMs()},
         {"render_ms", renderMs},
@@ -198,7 +200,11 @@ void addRenderCommand(CLI::App &app) {
   auto options = std::make_shared<RenderOptions>();
   RenderOptions &o = *options;
   CLI::App *cmd = app.add_subcommand("render", "Render a mesh to a PNG");
-  cmd->add_option("MESH", o.mesh, "Mesh file (.vtu, .vtk)")->required();
+  cmd->add_option("MESH", o.mesh,
+                  "Mesh file (.vtu, .vtk, .msh, .umesh; a .pvd series or numbered files such as data_%d.vtu)")
+      ->required();
+  cmd->add_option("--time-step", o.timeStep, "Time step of a series or of a Gmsh file's data, from 0")
+      ->capture_default_str();
   cmd->add_option("--field", o.field, "Scalar field to render (default: the first)");
   cmd->add_option("--tf", o.tf, "Transfer function: a ParaView preset JSON file or a built-in name");
   cmd->add_option("--tf-name", o.tfName, "Preset to take from the --tf file (default: the first)");

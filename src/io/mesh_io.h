@@ -7,6 +7,11 @@
 
 namespace uvr {
 
+/// What to read of a file that holds more than one mesh or field state.
+struct LoadOptions {
+  int timeStep = 0; ///< 0-based, in the order of the file's (or the series') time values
+};
+
 /// VTK XML unstructured grid: ascii, inline base64, appended raw or base64; zlib; UInt32/UInt64 headers;
 /// several Pieces (merged).
 UnstructuredGrid readVtu(const std::string &path);
@@ -14,6 +19,12 @@ UnstructuredGrid readVtu(const std::string &path);
 /// Legacy VTK unstructured grid: ascii or big-endian binary; `CELLS n size` and the 5.1 OFFSETS/CONNECTIVITY
 /// layout; POINT_DATA and CELL_DATA with SCALARS and FIELD arrays.
 UnstructuredGrid readVtkLegacy(const std::string &path);
+
+/// Gmsh .msh, formats 2.2 and 4.1, ascii and binary. Volume elements of any order (by their corners; one
+/// line on stderr says so), lower-dimensional ones for buildMesh to skip; $NodeData and $ElementData at
+/// `options.timeStep` (the n-th distinct time-step index of each field). Sets `*timeStepCount` if given.
+UnstructuredGrid readGmsh(const std::string &path, const LoadOptions &options = {},
+                          int *timeStepCount = nullptr);
 
 /// The binary format of Wald's umesh library (UMesh::saveTo): vertices, named per-vertex scalars and the
 /// cells of each type, little-endian, read straight into place. Cells are checked and wound as VTK expects;
@@ -30,7 +41,13 @@ void writeUmesh(const std::string &path, const Mesh &mesh);
 void writeVtu(const std::string &path, const Mesh &mesh, bool compress = false);
 
 /// Reads any supported format and builds the mesh. Throws uvr::Error naming the file and position.
-Mesh loadMesh(const std::string &path);
+/// Besides single files, `path` may name a time series: a ParaView .pvd collection (its DataSets sorted by
+/// timestep; several parts of one step are merged), or files numbered by a pattern such as data_%d.vtu,
+/// data_%04d.vtu or data_*.vtu (sorted by their numbers). `options.timeStep` picks the step.
+Mesh loadMesh(const std::string &path, const LoadOptions &options = {});
+
+/// The number of time steps `path` holds (1 for a file without time).
+int timeStepCount(const std::string &path);
 
 /// Writes `mesh` in the format its extension names (.umesh, .vtu).
 void saveMesh(const std::string &path, const Mesh &mesh);
