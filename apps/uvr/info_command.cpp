@@ -1,6 +1,7 @@
 #include "commands.h"
 
 #include "accel/partitions.h"
+#include "core/timer.h"
 #include "io/mesh_io.h"
 #include "mesh/mesh_stats.h"
 
@@ -20,7 +21,10 @@ struct InfoOptions {
 };
 
 void runInfo(const InfoOptions &o) {
+  const Timer loadTimer;
   const Mesh mesh = loadMesh(o.mesh, {o.timeStep});
+  const double loadMs = loadTimer.milliseconds();
+  const int timeSteps = timeStepCount(o.mesh);
   const VolumeStats volumes = volumeStats(mesh);
   const Box3f bounds = mesh.bounds();
   const uint32_t partitions =
@@ -51,6 +55,9 @@ void runInfo(const InfoOptions &o) {
       {"volume_median", volumes.median},
       {"volume_max", volumes.max},
       {"partitions", partitions},
+      {"time_steps", timeSteps},
+      {"time_step", o.timeStep},
+      {"load_ms", loadMs},
   };
   if (o.json) {
     std::printf("%s\n", info.dump(2).c_str());
@@ -75,6 +82,8 @@ void runInfo(const InfoOptions &o) {
   std::printf("  inverted cells  %llu\n", static_cast<unsigned long long>(mesh.invertedCells));
   std::printf("  cell volume     min %g, median %g, max %g\n", volumes.min, volumes.median, volumes.max);
   std::printf("  partitions      %u (leaf size %u)\n", partitions, kDefaultLeafSize);
+  std::printf("  time steps      %d (showing %d)\n", timeSteps, o.timeStep);
+  std::printf("  load            %.1f ms\n", loadMs);
 }
 
 } // namespace
@@ -83,9 +92,14 @@ void addInfoCommand(CLI::App &app) {
   auto options = std::make_shared<InfoOptions>();
   CLI::App *cmd =
       app.add_subcommand("info", "Describe a mesh: cells, fields, bounds, cell volumes, partitions");
-  cmd->add_option("MESH", options->mesh, "Mesh file (.vtu, .vtk, .e, .ex2, .exo, .g)")->required();
+  cmd->add_option(
+         "MESH", options->mesh,
+         "Mesh file (.vtu, .vtk, .msh, .umesh, .e, .ex2, .exo, .g; a .pvd series or numbered files such "
+         "as data_%d.vtu)")
+      ->required();
   cmd->add_flag("--json", options->json, "Print JSON");
-  cmd->add_option("--time-step", options->timeStep, "Time step of an Exodus file, from 0")
+  cmd->add_option("--time-step", options->timeStep,
+                  "Time step of a series, an Exodus file or a Gmsh file's data, from 0")
       ->capture_default_str();
   cmd->callback([options] { runInfo(*options); });
 }

@@ -71,6 +71,7 @@ void runRender(const RenderCommandOptions &o) {
                stats["samples_per_pixel_mean"].get<double>(), renderMs);
   if (!o.stats.empty()) {
     stats["load_ms"] = loaded.loadMs;
+    stats["time_step"] = o.view.timeStep;
     stats["frames"] = o.frames;
     writeStats(o.stats, stats);
   }

@@ -180,7 +180,7 @@ def test_same_image_as_the_command(tmp_path):
     np.testing.assert_array_equal(image[:, :, :3], cli_image)
 
     stats = renderer.last_stats
-    assert set(stats) == set(cli_stats) - {"load_ms", "frames"}
+    assert set(stats) == set(cli_stats) - {"load_ms", "frames", "time_step"}
     for key in ("mode", "width", "height", "cells", "partitions", "partitions_skipped", "samples_total",
                 "samples_per_pixel_max", "s1", "s2", "p", "unit", "leaf_size", "field", "range", "backend"):
         assert stats[key] == pytest.approx(cli_stats[key], rel=1e-6), key
