@@ -18,10 +18,11 @@ namespace {
 
 namespace fs = std::filesystem;
 
-const std::string kCdl = std::string(UVR_TEST_DATA) + "/exodus/";
 const std::string kShared = std::string(UVR_SHARED_DATA) + "/";
 
 #if UVR_HAVE_NETCDF
+
+const std::string kCdl = std::string(UVR_TEST_DATA) + "/exodus/";
 
 class ExodusReader : public ::testing::Test {
 protected:

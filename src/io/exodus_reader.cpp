@@ -15,6 +15,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cerrno>
+#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -220,10 +221,21 @@ public:
     readTimeStep();
 
     grid.offsets.assign(1, 0);
+    // Blocks in index order, found by their connect<b> variables: num_el_blk alone may claim any count.
     const uint64_t blockCount = dimension("num_el_blk", false);
-    std::vector<uint64_t> blockCells; // elements kept per block, 0 for skipped blocks
-    for (uint64_t b = 1; b <= blockCount; ++b)
-      blockCells.push_back(readBlock(grid, b, nodes));
+    std::vector<uint64_t> blocks;
+    for (const std::string &name : variableNames_) {
+      uint64_t b = 0;
+      auto [end, ec] = std::from_chars(name.data() + 7, name.data() + name.size(), b);
+      if (name.starts_with("connect") && ec == std::errc() && end == name.data() + name.size() && b >= 1 &&
+          b <= blockCount)
+        blocks.push_back(b);
+    }
+    std::sort(blocks.begin(), blocks.end());
+    std::vector<std::pair<uint64_t, uint64_t>> blockCells; // (block, elements) of the kept blocks
+    for (uint64_t b : blocks)
+      if (uint64_t cells = readBlock(grid, b, nodes))
+        blockCells.emplace_back(b, cells);
 
     readNodalVariables(grid, nodes);
     readElementVariables(grid, blockCells);
@@ -262,6 +274,21 @@ private:
     // netCDF-3 stores every value uncompressed; netCDF-4 (HDF5) may deflate, at most about 1032:1.
     const bool hdf5 = format == NC_FORMAT_NETCDF4 || format == NC_FORMAT_NETCDF4_CLASSIC;
     compressionLimit_ = hdf5 ? 1100 : 1;
+    int count = 0;
+    check(nc_inq_nvars(ncid_, &count), "netCDF header", "cannot list the variables");
+    for (int id = 0; id < count; ++id) {
+      char name[NC_MAX_NAME + 1] = {};
+      check(nc_inq_varname(ncid_, id, name), "netCDF header", "cannot list the variables");
+      variableNames_.emplace_back(name);
+    }
+  }
+
+  /// Fails unless `count` variables (num_nod_var, num_elem_var) could each have their own netCDF variable.
+  void checkVariableCount(const std::string &dimensionName, uint64_t count) const {
+    if (count > variableNames_.size())
+      fail("dimension '" + dimensionName + "'", std::to_string(count) +
+                                                    " variables declared but the file has " +
+                                                    std::to_string(variableNames_.size()) + " in all");
   }
 
   /// A dimension's length; 0 when absent and not `required`.
@@ -489,13 +516,19 @@ private:
     const uint64_t count = dimension("num_nod_var", false);
     if (count == 0 || timeSteps_ == 0)
       return;
-    const std::vector<std::string> varNames = names("name_nod_var", count, "node_variable_");
     const bool combined = hasVariable("vals_nod_var"); // the layout before Exodus 4.x: one 3-D variable
     Variable all;
     if (combined) {
       all = variable("vals_nod_var");
       expectShape(all, {timeSteps_, count, nodes});
+      uint64_t total = 0;
+      if (__builtin_mul_overflow(count, uint64_t(nodes), &total))
+        fail(all.position, "value count overflows");
+      checkRoom(all, total);
+    } else {
+      checkVariableCount("num_nod_var", count);
     }
+    const std::vector<std::string> varNames = names("name_nod_var", count, "node_variable_");
     for (uint64_t i = 0; i < count; ++i) {
       std::vector<float> values =
           combined ? toFloat(readSlab<double>(all, {size_t(timeStep_), i, 0}, {1, 1, nodes}))
@@ -504,22 +537,24 @@ private:
     }
   }
 
-  void readElementVariables(UnstructuredGrid &grid, const std::vector<uint64_t> &blockCells) {
+  void readElementVariables(UnstructuredGrid &grid,
+                            const std::vector<std::pair<uint64_t, uint64_t>> &blockCells) {
     const uint64_t count = dimension("num_elem_var", false);
     if (count == 0 || timeSteps_ == 0)
       return;
+    checkVariableCount("num_elem_var", count);
     const std::vector<std::string> varNames = names("name_elem_var", count, "element_variable_");
     const uint64_t cells = grid.types.size();
     for (uint64_t i = 0; i < count; ++i) {
       ScalarField field{varNames[i], Centering::Cell, std::vector<float>(cells, NAN)};
       uint64_t first = 0;
-      for (size_t b = 0; b < blockCells.size(); ++b) {
-        const std::string name = "vals_elem_var" + std::to_string(i + 1) + "eb" + std::to_string(b + 1);
-        if (blockCells[b] > 0 && hasVariable(name)) {
-          std::vector<float> values = stepValues(name, blockCells[b]);
+      for (auto [block, elements] : blockCells) {
+        const std::string name = "vals_elem_var" + std::to_string(i + 1) + "eb" + std::to_string(block);
+        if (hasVariable(name)) {
+          std::vector<float> values = stepValues(name, elements);
           std::copy(values.begin(), values.end(), field.values.begin() + ptrdiff_t(first));
         }
-        first += blockCells[b];
+        first += elements;
       }
       grid.fields.push_back(std::move(field));
     }
@@ -531,6 +566,7 @@ private:
   uint64_t fileSize_ = 0;
   uint64_t compressionLimit_ = 1;
   uint64_t timeSteps_ = 0;
+  std::vector<std::string> variableNames_;
 };
 
 } // namespace
