@@ -348,3 +348,80 @@ TEST(GenTet, LinearVolumeSampledExactly) {
     ASSERT_NEAR(mesh.fields[1].values[t], sum / 4, 2e-3) << "tet " << t;
   }
 }
+
+namespace {
+
+/// Jacobian determinants at the 8 corners of a hexahedron (VTK order): all positive for a valid cell.
+double minCornerJacobian(const Mesh &m, uint64_t h) {
+  const uint32_t *v = &m.hexes[8 * h];
+  // Corner c's three edges, towards its neighbours along +r, +s, +t of the reference cube.
+  const int next[8][3] = {{1, 3, 4}, {2, 0, 5}, {3, 1, 6}, {0, 2, 7},
+                          {7, 5, 0}, {4, 6, 1}, {5, 7, 2}, {6, 4, 3}};
+  double lowest = INFINITY;
+  for (int c = 0; c < 8; ++c) {
+    const Vec3f o = m.points[v[c]];
+    const Vec3f a = m.points[v[next[c][0]]] - o, b = m.points[v[next[c][1]]] - o,
+                d = m.points[v[next[c][2]]] - o;
+    lowest = std::min(lowest, double(dot(a, cross(b, d))));
+  }
+  return lowest;
+}
+
+} // namespace
+
+TEST(GenHex, ConformingGradedPositiveCounted) {
+  const Volume volume = ballVolume();
+  for (uint64_t target : {8000u, 30000u}) {
+    GenOptions options;
+    options.cells = target;
+    options.threshold = 50.f;
+    const Mesh mesh = generateHexMesh(volume, options);
+    EXPECT_NEAR(double(mesh.hexCount()), double(target), 0.1 * double(target));
+    EXPECT_EQ(mesh.tetCount(), 0u);
+    // Quad faces shared by at most two cells; boundary edges closed.
+    const int faces[6][4] = {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4},
+                             {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 0, 4, 7}};
+    std::map<std::array<uint32_t, 4>, int> shared;
+    for (uint64_t h = 0; h < mesh.hexCount(); ++h)
+      for (const auto &f : faces) {
+        std::array<uint32_t, 4> key;
+        for (int k = 0; k < 4; ++k)
+          key[k] = mesh.hexes[8 * h + f[k]];
+        std::sort(key.begin(), key.end());
+        ++shared[key];
+      }
+    uint64_t interior = 0, boundary = 0, over = 0;
+    for (const auto &[key, count] : shared)
+      (count == 2 ? interior : count == 1 ? boundary : over)++;
+    EXPECT_EQ(over, 0u);
+    EXPECT_EQ(2 * interior + boundary, 6 * mesh.hexCount());
+    EXPECT_GT(interior, boundary);
+    for (uint64_t h = 0; h < mesh.hexCount(); ++h)
+      ASSERT_GT(minCornerJacobian(mesh, h), 0.0) << "hex " << h;
+    const VolumeStats volumes = volumeStats(mesh);
+    EXPECT_GE(volumes.max / volumes.min, 10.0);
+  }
+}
+
+TEST(GenHex, DeterministicAndLinearExact) {
+  const Volume volume =
+      makeVolume(30, 26, 22, [](double i, double j, double k) { return 2 * i + 3 * j - k + 40; });
+  GenOptions options;
+  options.cells = 15000;
+  options.threshold = 60.f;
+  options.seed = 3;
+  const Mesh a = generateHexMesh(volume, options);
+  Mesh b;
+  {
+    tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
+    b = generateHexMesh(volume, options);
+  }
+  EXPECT_EQ(a.hexes, b.hexes);
+  ASSERT_EQ(a.points.size(), b.points.size());
+  EXPECT_EQ(0, std::memcmp(a.points.data(), b.points.data(), a.points.size() * sizeof(Vec3f)));
+  for (size_t p = 0; p < a.points.size(); ++p) {
+    const Vec3f w = a.points[p];
+    const double i = (w.x - 10.0) / 0.5, j = (w.y + 3.0) / 1.0, k = (w.z - 1.0) / 0.8;
+    ASSERT_NEAR(a.fields[0].values[p], 2 * i + 3 * j - k + 40, 2e-3) << "point " << p;
+  }
+}
