@@ -8,5 +8,6 @@ namespace uvr {
 void addRenderCommand(CLI::App &app);
 void addInfoCommand(CLI::App &app);
 void addCompareCommand(CLI::App &app);
+void addConvertCommand(CLI::App &app);
 
 } // namespace uvr

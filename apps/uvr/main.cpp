@@ -11,6 +11,7 @@ int main(int argc, char **argv) {
   uvr::addRenderCommand(app);
   uvr::addInfoCommand(app);
   uvr::addCompareCommand(app);
+  uvr::addConvertCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError &e) {

@@ -22,20 +22,24 @@ struct KdNode {
 
 struct PartitionsView {
   const KdNode *nodes = nullptr;
-  const Box3f *bounds = nullptr; ///< shrunk box per partition
-  Box3f rootBounds;              ///< the mesh bounds, slightly padded: the KD-tree's root cell
+  const Box3f *nodeBounds = nullptr; ///< per node, the union of the shrunk boxes of the partitions below
+  const Box3f *bounds = nullptr;     ///< shrunk box per partition
+  Box3f rootBounds;                  ///< the mesh bounds, slightly padded: the KD-tree's root cell
   uint32_t count = 0;
 };
 
 struct Partitions {
   std::vector<KdNode> nodes;
+  std::vector<Box3f> nodeBounds;
   std::vector<Box3f> bounds;
   std::vector<float> valueMin, valueMax; ///< scalar range of the cells listed in each partition
   std::vector<uint64_t> cellCounts;      ///< cells listed (a cell straddling leaves is listed in each)
   Box3f rootBounds;
 
   uint32_t count() const { return uint32_t(bounds.size()); }
-  PartitionsView view() const { return {nodes.data(), bounds.data(), rootBounds, count()}; }
+  PartitionsView view() const {
+    return {nodes.data(), nodeBounds.data(), bounds.data(), rootBounds, count()};
+  }
 };
 
 /// Median-split KD-tree over cell centroids until a leaf holds at most `leafSize` cells.
@@ -46,10 +50,12 @@ constexpr uint32_t kDefaultLeafSize = 64;
 
 /// Visits the partitions that the ray [tMin, tMax] crosses, front to back, as `visit(partition, t0, t1)`
 /// with the ray's exact interval inside the leaf; stops when `visit` returns false. Neighbouring leaves share
-/// the split's t, so the intervals tile the ray with neither gaps nor overlaps.
+/// the split's t, so the intervals tile the ray with neither gaps nor overlaps. With `nodeMaxOpacity` (per
+/// node, for the current transfer function), whole subtrees that are transparent or whose cells the ray
+/// misses are skipped without visiting their leaves.
 template <typename Visit>
 UVR_HOST_DEVICE void traversePartitions(const PartitionsView &parts, const Ray &ray, float tMin, float tMax,
-                                        Visit &&visit) {
+                                        const float *nodeMaxOpacity, Visit &&visit) {
   constexpr int kStackSize = 64;
   struct Entry {
     uint32_t node;
@@ -60,19 +66,22 @@ UVR_HOST_DEVICE void traversePartitions(const PartitionsView &parts, const Ray &
   uint32_t node = 0;
   float t0 = tMin, t1 = tMax;
   while (true) {
-    const KdNode *n = &parts.nodes[node];
-    while (n->axis != KdNode::kLeaf) {
-      const int axis = int(n->axis);
+    float b0, b1;
+    const bool culled = nodeMaxOpacity && (nodeMaxOpacity[node] <= 0.f ||
+                                           !intersectBox(ray, parts.nodeBounds[node], t0, t1, b0, b1));
+    const KdNode &n = parts.nodes[node];
+    if (!culled && n.axis != KdNode::kLeaf) {
+      const int axis = int(n.axis);
       const float origin = ray.origin[axis];
       const float direction = ray.direction[axis];
       // The side holding the origin comes first; a ray lying in the plane belongs to the upper side.
-      const bool originBelow = origin < n->split || (origin == n->split && direction < 0.f);
-      const uint32_t nearChild = originBelow ? n->child : n->child + 1;
-      const uint32_t farChild = originBelow ? n->child + 1 : n->child;
+      const bool originBelow = origin < n.split || (origin == n.split && direction < 0.f);
+      const uint32_t nearChild = originBelow ? n.child : n.child + 1;
+      const uint32_t farChild = originBelow ? n.child + 1 : n.child;
       if (direction == 0.f) {
-        node = origin < n->split ? n->child : n->child + 1;
+        node = origin < n.split ? n.child : n.child + 1;
       } else {
-        const float tSplit = (n->split - origin) * ray.invDirection[axis];
+        const float tSplit = (n.split - origin) * ray.invDirection[axis];
         if (tSplit >= t1 || tSplit <= 0.f) {
           node = nearChild;
         } else if (tSplit <= t0) {
@@ -84,9 +93,9 @@ UVR_HOST_DEVICE void traversePartitions(const PartitionsView &parts, const Ray &
           t1 = tSplit;
         }
       }
-      n = &parts.nodes[node];
+      continue;
     }
-    if (t0 < t1 && !visit(n->child, t0, t1))
+    if (!culled && t0 < t1 && !visit(n.child, t0, t1))
       return;
     if (top == 0)
       return;

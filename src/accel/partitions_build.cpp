@@ -182,6 +182,17 @@ Partitions buildPartitions(const MeshView &mesh, uint32_t leafSize) {
     parts.valueMax[i] = leaves[i].valueMax;
     parts.cellCounts[i] = leaves[i].count;
   }
+  // Children follow their parents in `nodes`, so one backward pass gathers each subtree's box.
+  parts.nodeBounds.assign(parts.nodes.size(), Box3f{});
+  for (size_t node = parts.nodes.size(); node-- > 0;) {
+    const KdNode &n = parts.nodes[node];
+    if (n.axis == KdNode::kLeaf) {
+      parts.nodeBounds[node] = parts.bounds[n.child];
+    } else {
+      parts.nodeBounds[node] = parts.nodeBounds[n.child];
+      parts.nodeBounds[node].extend(parts.nodeBounds[n.child + 1]);
+    }
+  }
   progress.finish();
   return parts;
 }

@@ -86,9 +86,12 @@ UVR_HOST_DEVICE inline bool intersectBox(const Ray &ray, const Box3f &box, float
   for (int axis = 0; axis < 3; ++axis) {
     const float tLower = (box.lower[axis] - ray.origin[axis]) * ray.invDirection[axis];
     const float tUpper = (box.upper[axis] - ray.origin[axis]) * ray.invDirection[axis];
-    // NaN (0 * inf on a slab plane) leaves the interval unchanged, as fminf/fmaxf drop NaN.
-    tMin = fmaxf(tMin, fminf(tLower, tUpper));
-    tMax = fminf(tMax, fmaxf(tLower, tUpper));
+    // A ray lying in a slab plane gives 0 * inf = NaN there; every comparison with NaN is false, so the
+    // interval is left unchanged (the ray counts as inside the slab) without fminf's library call.
+    const float tNear = tLower < tUpper ? tLower : tUpper;
+    const float tFar = tLower < tUpper ? tUpper : tLower;
+    tMin = tNear > tMin ? tNear : tMin;
+    tMax = tFar < tMax ? tFar : tMax;
   }
   t0 = tMin;
   t1 = tMax;

@@ -1,4 +1,5 @@
-// A whole file in memory, read at once: what the readers parse.
+// Reading files: whole at once (what the text readers parse), or at given offsets straight into place (what
+// the binary readers do, to copy each byte once).
 #pragma once
 
 #include <cstdint>
@@ -12,6 +13,25 @@ struct FileBuffer {
   uint64_t size = 0;
 
   char *chars() const { return reinterpret_cast<char *>(data.get()); }
+};
+
+/// A regular file open for reading; throws uvr::Error naming it when it cannot be opened or read.
+class InputFile {
+public:
+  explicit InputFile(const std::string &path);
+  ~InputFile();
+  InputFile(const InputFile &) = delete;
+  InputFile &operator=(const InputFile &) = delete;
+
+  uint64_t size() const { return size_; }
+  const std::string &path() const { return path_; }
+  /// Copies bytes [offset, offset + n) to dst; the caller checks that they lie inside the file.
+  void read(uint64_t offset, void *dst, uint64_t n) const;
+
+private:
+  std::string path_;
+  int fd_ = -1;
+  uint64_t size_ = 0;
 };
 
 /// Reads a regular file; throws uvr::Error naming it when it cannot be opened or read.

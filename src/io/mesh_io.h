@@ -1,4 +1,4 @@
-// Mesh readers, one per format; loadMesh picks one by the file's extension.
+// Mesh readers and writers, one per format; loadMesh and saveMesh pick one by the file's extension.
 #pragma once
 
 #include "mesh/mesh.h"
@@ -15,7 +15,24 @@ UnstructuredGrid readVtu(const std::string &path);
 /// layout; POINT_DATA and CELL_DATA with SCALARS and FIELD arrays.
 UnstructuredGrid readVtkLegacy(const std::string &path);
 
+/// The binary format of Wald's umesh library (UMesh::saveTo): vertices, named per-vertex scalars and the
+/// cells of each type, little-endian, read straight into place. Cells are checked and wound as VTK expects;
+/// they are ordered spatially as buildMesh does unless the file is in that order already (as uvr writes
+/// it). Triangles and quads count as skipped cells; umesh's structured grids are refused.
+Mesh readUmesh(const std::string &path);
+
+/// Writes umesh's current layout (magic 0x234235568). umesh stores per-vertex scalars only, so a cell field
+/// is refused with an error. umesh's own loader reads back only the first scalar field.
+void writeUmesh(const std::string &path, const Mesh &mesh);
+
+/// Writes a VTK XML unstructured grid: appended raw data, UInt64 headers, Int64 connectivity and offsets,
+/// Float32 points and fields; each array zlib-compressed when `compress`.
+void writeVtu(const std::string &path, const Mesh &mesh, bool compress = false);
+
 /// Reads any supported format and builds the mesh. Throws uvr::Error naming the file and position.
 Mesh loadMesh(const std::string &path);
+
+/// Writes `mesh` in the format its extension names (.umesh, .vtu).
+void saveMesh(const std::string &path, const Mesh &mesh);
 
 } // namespace uvr

@@ -229,6 +229,7 @@ Mesh buildMesh(UnstructuredGrid &&grid, const std::string &source) {
     }
     mesh.fields.push_back(std::move(field));
   }
+  orderSpatially(mesh);
   return mesh;
 }
 

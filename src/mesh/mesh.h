@@ -62,8 +62,13 @@ struct Mesh {
 /// wedge base faces away from its top). Returns whether it was inverted.
 bool orientCell(CellType type, uint32_t *v, const std::vector<Vec3f> &points);
 
-/// Groups the volume cells of `grid` by type, fixes their winding and reorders cell fields to match.
-/// Lower-dimensional cells are dropped and counted; `source` names the file in errors.
+/// Groups the volume cells of `grid` by type, fixes their winding, orders them spatially and reorders the
+/// fields to match. Lower-dimensional cells are dropped and counted; `source` names the file in errors.
 Mesh buildMesh(UnstructuredGrid &&grid, const std::string &source);
+
+/// Sorts each cell type's cells along a Morton curve through their centroids and numbers the points by first
+/// use, so that neighbouring cells and their corners lie close in memory: point location walks and BVH
+/// queries then hit the cache. Files often list cells in no spatial order at all. Fields follow.
+void orderSpatially(Mesh &mesh);
 
 } // namespace uvr

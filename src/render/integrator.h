@@ -3,6 +3,7 @@
 #pragma once
 
 #include "accel/bvh.h"
+#include "accel/occupancy.h"
 #include "accel/partitions.h"
 #include "core/host_device.h"
 #include "mesh/cell.h"
@@ -30,10 +31,12 @@ struct IntegratorSettings {
 struct SceneView {
   MeshView mesh;
   BvhView bvh;
+  OccupancyView occupancy; ///< used by the skipping modes
   const uint32_t *tetNeighbors = nullptr; ///< 4 per tet; see buildTetNeighbors
   PartitionsView partitions;
-  const float *maxOpacity = nullptr; ///< per partition, for the current transfer function
-  const float *sigma = nullptr;      ///< per partition, normalised colour deviation
+  const float *maxOpacity = nullptr;     ///< per partition, for the current transfer function
+  const float *nodeMaxOpacity = nullptr; ///< per KD node, the maximum over the partitions below
+  const float *sigma = nullptr;          ///< per partition, normalised colour deviation
   TransferFunctionView tf;
 };
 
@@ -64,7 +67,11 @@ UVR_HOST_DEVICE inline bool walkTets(const SceneView &scene, Vec3f p, uint32_t &
 }
 
 /// Finds the cell holding `p`, starting from `cell` (the previous sample's), and returns the field there.
-UVR_HOST_DEVICE inline bool locateSample(const SceneView &scene, Vec3f p, uint32_t &cell, float &value) {
+/// `occupancy` rejects points in empty space at once; an empty view leaves every point to the walk and BVH.
+UVR_HOST_DEVICE inline bool locateSample(const SceneView &scene, const OccupancyView &occupancy, Vec3f p,
+                                         uint32_t &cell, float &value) {
+  if (!occupancy.mayHoldCell(p))
+    return false;
   if (cell != kNoCell) {
     if (scene.tetNeighbors && cell < scene.mesh.tetCount) {
       if (walkTets(scene, p, cell, value))
@@ -99,6 +106,11 @@ UVR_HOST_DEVICE inline RayResult integrateRay(const SceneView &scene, const Inte
   if (!intersectBox(ray, scene.partitions.rootBounds, 0.f, INFINITY, tEnter, tExit))
     return result;
 
+  const bool skip = settings.mode == RenderMode::Skip || settings.mode == RenderMode::Full;
+  const bool adaptive = settings.mode == RenderMode::Adaptive || settings.mode == RenderMode::Full;
+  // The occupancy grid skips empty space voxel by voxel: part of space skipping, so the modes without it
+  // locate every sample the plain way, as the paper's reference ray marcher does.
+  const OccupancyView occupancy = skip ? scene.occupancy : OccupancyView{};
   uint32_t cell = hint;
   bool first = true;
   // Marches [ta, tb) with step `step`; false once the ray is opaque.
@@ -112,7 +124,7 @@ UVR_HOST_DEVICE inline RayResult integrateRay(const SceneView &scene, const Inte
     for (float t = tEnter + k * s1; t < tb; k += stride, t = tEnter + k * s1) {
       ++result.samples;
       float value;
-      if (!locateSample(scene, ray.at(t), cell, value))
+      if (!locateSample(scene, occupancy, ray.at(t), cell, value))
         continue;
       if (first) {
         hint = cell;
@@ -138,9 +150,8 @@ UVR_HOST_DEVICE inline RayResult integrateRay(const SceneView &scene, const Inte
     march(tEnter, tExit, settings.s1);
     return result;
   }
-  const bool skip = settings.mode == RenderMode::Skip || settings.mode == RenderMode::Full;
-  const bool adaptive = settings.mode == RenderMode::Adaptive || settings.mode == RenderMode::Full;
-  traversePartitions(scene.partitions, ray, tEnter, tExit, [&](uint32_t part, float t0, float t1) {
+  const float *cull = skip ? scene.nodeMaxOpacity : nullptr;
+  traversePartitions(scene.partitions, ray, tEnter, tExit, cull, [&](uint32_t part, float t0, float t1) {
     if (skip) {
       if (scene.maxOpacity[part] <= 0.f)
         return true;

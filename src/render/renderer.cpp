@@ -33,6 +33,7 @@ Renderer::Renderer(const Mesh &mesh, int fieldIndex, uint32_t leafSize) : mesh_(
   const Timer timer;
   meshView_ = makeMeshView(mesh_, fieldIndex);
   bvh_ = buildBvh(meshView_);
+  occupancy_ = buildOccupancyGrid(meshView_);
   tetNeighbors_ = buildTetNeighbors(mesh_);
   partitions_ = buildPartitions(meshView_, leafSize);
   buildMs_ = timer.milliseconds();
@@ -49,9 +50,11 @@ SceneView Renderer::sceneView() const {
   SceneView scene;
   scene.mesh = meshView_;
   scene.bvh = bvh_.view();
+  scene.occupancy = occupancy_.view();
   scene.tetNeighbors = tetNeighbors_.empty() ? nullptr : tetNeighbors_.data();
   scene.partitions = partitions_.view();
   scene.maxOpacity = metadata_.maxOpacity.data();
+  scene.nodeMaxOpacity = metadata_.nodeMaxOpacity.data();
   scene.sigma = metadata_.sigma.data();
   scene.tf = tf_->view();
   return scene;

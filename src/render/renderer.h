@@ -3,6 +3,7 @@
 #pragma once
 
 #include "accel/bvh.h"
+#include "accel/occupancy.h"
 #include "accel/partitions.h"
 #include "image/image.h"
 #include "mesh/mesh.h"
@@ -61,6 +62,7 @@ private:
   const Mesh &mesh_;
   MeshView meshView_;
   Bvh bvh_;
+  OccupancyGrid occupancy_;
   std::vector<uint32_t> tetNeighbors_;
   Partitions partitions_;
   std::optional<TransferFunction> tf_;

@@ -97,6 +97,14 @@ PartitionMetadata computePartitionMetadata(const Partitions &partitions, const T
       ++meta.transparentCount;
     }
   }
+  meta.nodeMaxOpacity.resize(partitions.nodes.size());
+  for (size_t node = partitions.nodes.size(); node-- > 0;) { // children follow their parents
+    const KdNode &n = partitions.nodes[node];
+    meta.nodeMaxOpacity[node] =
+        n.axis == KdNode::kLeaf ? meta.maxOpacity[n.child]
+                                : std::max(meta.nodeMaxOpacity[n.child], meta.nodeMaxOpacity[n.child + 1]);
+  }
+
   const float span = highest - lowest;
   for (uint32_t i = 0; i < count; ++i)
     meta.sigma[i] = span > 0.f ? std::sqrt(std::clamp((variance[i] - lowest) / span, 0.f, 1.f)) : 1.f;

@@ -61,7 +61,8 @@ private:
 /// in time linear in table entries and partitions, independent of the cell count.
 struct PartitionMetadata {
   std::vector<float> maxOpacity;
-  std::vector<float> sigma; ///< colour standard deviation, normalised over all partitions to [0, 1]
+  std::vector<float> nodeMaxOpacity; ///< per KD node, the maximum over the partitions below
+  std::vector<float> sigma;          ///< colour standard deviation, normalised over all partitions to [0, 1]
   uint32_t transparentCount = 0;
 };
 

@@ -1,0 +1,68 @@
+#include "commands.h"
+
+#include "core/error.h"
+#include "io/mesh_io.h"
+
+#include <cstdio>
+#include <memory>
+
+namespace uvr {
+
+namespace {
+
+struct ConvertOptions {
+  std::string input;
+  std::string output;
+  std::vector<std::string> fields;
+  bool zlib = false;
+};
+
+/// Keeps the named fields in the order given; all of them when none is named.
+void chooseFields(Mesh &mesh, const std::vector<std::string> &names, const std::string &path) {
+  if (names.empty())
+    return;
+  std::vector<ScalarField> chosen;
+  for (const std::string &name : names) {
+    const int index = mesh.findField(name);
+    if (index < 0) {
+      std::string available;
+      for (const ScalarField &field : mesh.fields)
+        available += (available.empty() ? "" : ", ") + field.name;
+      throw Error(path, "",
+                  "no field '" + name + "' (the file has: " + (available.empty() ? "none" : available) + ")");
+    }
+    chosen.push_back(mesh.fields[size_t(index)]);
+  }
+  mesh.fields = std::move(chosen);
+}
+
+void runConvert(const ConvertOptions &o) {
+  Mesh mesh = loadMesh(o.input);
+  chooseFields(mesh, o.fields, o.input);
+  if (o.zlib) {
+    if (!o.output.ends_with(".vtu") && !o.output.ends_with(".VTU"))
+      throw Error(o.output, "", "--zlib applies to .vtu output only");
+    writeVtu(o.output, mesh, true);
+  } else {
+    saveMesh(o.output, mesh);
+  }
+  std::fprintf(stderr, "uvr: wrote %s: %zu points, %llu cells, %zu fields\n", o.output.c_str(),
+               mesh.points.size(), static_cast<unsigned long long>(mesh.cellCount()), mesh.fields.size());
+}
+
+} // namespace
+
+void addConvertCommand(CLI::App &app) {
+  auto options = std::make_shared<ConvertOptions>();
+  CLI::App *cmd = app.add_subcommand("convert", "Convert a mesh to another format (.vtu, .umesh)");
+  cmd->add_option("IN", options->input, "Mesh file to read (.vtu, .vtk, .umesh)")->required();
+  cmd->add_option("OUT", options->output, "Mesh file to write (.vtu, .umesh)")->required();
+  cmd->add_option("--field", options->fields, "Field to keep (repeat the option for several; default: all)")
+      ->expected(1)
+      ->allow_extra_args(false)
+      ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+  cmd->add_flag("--zlib", options->zlib, "Compress the .vtu arrays with zlib");
+  cmd->callback([options] { runConvert(*options); });
+}
+
+} // namespace uvr

@@ -1,0 +1,50 @@
+// A bit per voxel of a grid over the mesh bounds, set where some cell's box reaches: most samples that fall
+// in no cell (empty space inside the bounds, concavities of the mesh) are rejected by one load instead of a
+// failed walk and a failed BVH query. Flat arrays, usable on host and device.
+#pragma once
+
+#include "core/host_device.h"
+#include "core/vec.h"
+#include "mesh/mesh_view.h"
+
+#include <cstdint>
+#include <vector>
+
+namespace uvr {
+
+struct OccupancyView {
+  const uint64_t *bits = nullptr; ///< null: every point may lie in a cell
+  Vec3f origin;
+  Vec3f voxelsPerUnit;
+  int nx = 0, ny = 0, nz = 0;
+
+  /// False only where no cell can hold `p`.
+  UVR_HOST_DEVICE bool mayHoldCell(Vec3f p) const {
+    if (!bits)
+      return true;
+    const float fx = (p.x - origin.x) * voxelsPerUnit.x, fy = (p.y - origin.y) * voxelsPerUnit.y,
+                fz = (p.z - origin.z) * voxelsPerUnit.z;
+    if (!(fx >= 0.f && fy >= 0.f && fz >= 0.f)) // also rejects NaN
+      return false;
+    const int x = int(fx), y = int(fy), z = int(fz);
+    if (x >= nx || y >= ny || z >= nz)
+      return false;
+    const uint64_t voxel = (uint64_t(z) * uint64_t(ny) + uint64_t(y)) * uint64_t(nx) + uint64_t(x);
+    return (bits[voxel >> 6] >> (voxel & 63)) & 1u;
+  }
+};
+
+struct OccupancyGrid {
+  std::vector<uint64_t> bits;
+  Vec3f origin, voxelsPerUnit;
+  int nx = 0, ny = 0, nz = 0;
+
+  OccupancyView view() const { return {bits.data(), origin, voxelsPerUnit, nx, ny, nz}; }
+  size_t memoryBytes() const { return bits.size() * sizeof(uint64_t); }
+};
+
+/// About `voxelsPerCell` voxels per cell over the mesh bounds (a bit each), every voxel that a cell's
+/// bounding box touches set.
+OccupancyGrid buildOccupancyGrid(const MeshView &mesh, float voxelsPerCell = 4.f);
+
+} // namespace uvr

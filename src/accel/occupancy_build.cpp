@@ -1,0 +1,110 @@
+#include "accel/occupancy.h"
+
+#include "mesh/cell.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+
+namespace uvr {
+namespace {
+
+// The four outward face planes of a tet, to tell voxels that cannot touch it.
+struct TetPlanes {
+  Vec3f normal[4];
+  float offset[4]; // a point q is beyond face i when dot(normal[i], q) > offset[i]
+
+  bool set(const MeshView &mesh, uint64_t tet) {
+    const uint32_t *v = mesh.tets + 4 * tet;
+    const Vec3f p[4] = {mesh.points[v[0]], mesh.points[v[1]], mesh.points[v[2]], mesh.points[v[3]]};
+    for (int i = 0; i < 4; ++i) { // face i is the one opposite corner i
+      const Vec3f a = p[(i + 1) % 4], b = p[(i + 2) % 4], c = p[(i + 3) % 4];
+      Vec3f n = cross(b - a, c - a);
+      if (dot(n, p[i] - a) > 0.f)
+        n = n * -1.f;
+      if (!(dot(n, n) > 0.f))
+        return false; // degenerate: keep its whole box
+      normal[i] = n;
+      // Padded by a relative epsilon so that rounding never clears a voxel the tet touches.
+      offset[i] = dot(n, a) + 1e-4f * (fabsf(n.x) * (fabsf(a.x) + 1.f) + fabsf(n.y) * (fabsf(a.y) + 1.f) +
+                                       fabsf(n.z) * (fabsf(a.z) + 1.f));
+    }
+    return true;
+  }
+
+  /// True when the box [lower, lower + size] lies wholly beyond one face plane.
+  bool excludes(Vec3f lower, Vec3f size) const {
+    for (int i = 0; i < 4; ++i) {
+      const Vec3f n = normal[i];
+      const Vec3f nearest{n.x > 0.f ? lower.x : lower.x + size.x, n.y > 0.f ? lower.y : lower.y + size.y,
+                          n.z > 0.f ? lower.z : lower.z + size.z};
+      if (dot(n, nearest) > offset[i])
+        return true;
+    }
+    return false;
+  }
+};
+
+void voxelRange(float lo, float hi, float origin, float scale, int count, int &first, int &last) {
+  first = std::clamp(int(std::floor((lo - origin) * scale)), 0, count - 1);
+  last = std::clamp(int(std::floor((hi - origin) * scale)), 0, count - 1);
+}
+
+} // namespace
+
+OccupancyGrid buildOccupancyGrid(const MeshView &mesh, float voxelsPerCell) {
+  OccupancyGrid grid;
+  const uint64_t cells = mesh.cellCount();
+  if (cells == 0)
+    return grid;
+  Box3f bounds;
+  for (uint64_t c = 0; c < cells; ++c) // cheap next to the marking below, and exact
+    bounds.extend(cellBounds(mesh, c));
+  const Vec3f size = bounds.size();
+  const double volume = std::max(double(size.x) * size.y * size.z, 1e-30);
+  // Cubic voxels; the count is capped so that the grid stays a small fraction of the mesh's memory.
+  const double voxels = std::min(double(voxelsPerCell) * double(cells), double(1ull << 33));
+  const double edge = std::cbrt(volume / voxels);
+  auto axisCount = [&](float extent) { return std::clamp(int(std::ceil(extent / edge)), 1, 1 << 20); };
+  grid.nx = axisCount(size.x);
+  grid.ny = axisCount(size.y);
+  grid.nz = axisCount(size.z);
+  grid.origin = bounds.lower;
+  // Voxels span the exact extent per axis, so that the upper bound maps to the last voxel, not past it.
+  grid.voxelsPerUnit = {size.x > 0.f ? float(grid.nx) / size.x : 0.f,
+                        size.y > 0.f ? float(grid.ny) / size.y : 0.f,
+                        size.z > 0.f ? float(grid.nz) / size.z : 0.f};
+  const uint64_t total = uint64_t(grid.nx) * uint64_t(grid.ny) * uint64_t(grid.nz);
+  grid.bits.assign((total + 63) / 64, 0);
+
+  const Vec3f voxelSize{size.x / float(grid.nx), size.y / float(grid.ny), size.z / float(grid.nz)};
+  tbb::parallel_for(uint64_t(0), cells, [&](uint64_t c) {
+    const Box3f box = cellBounds(mesh, c);
+    int x0, x1, y0, y1, z0, z1;
+    voxelRange(box.lower.x, box.upper.x, grid.origin.x, grid.voxelsPerUnit.x, grid.nx, x0, x1);
+    voxelRange(box.lower.y, box.upper.y, grid.origin.y, grid.voxelsPerUnit.y, grid.ny, y0, y1);
+    voxelRange(box.lower.z, box.upper.z, grid.origin.z, grid.voxelsPerUnit.z, grid.nz, z0, z1);
+    // A tet fills a sixth of its box or less: voxels wholly beyond one of its face planes stay clear.
+    TetPlanes planes;
+    const bool tet = c < mesh.tetCount && planes.set(mesh, c);
+    for (int z = z0; z <= z1; ++z)
+      for (int y = y0; y <= y1; ++y)
+        for (int x = x0; x <= x1; ++x) {
+          const Vec3f lower{grid.origin.x + float(x) * voxelSize.x, grid.origin.y + float(y) * voxelSize.y,
+                            grid.origin.z + float(z) * voxelSize.z};
+          if (tet && planes.excludes(lower, voxelSize))
+            continue;
+          const uint64_t voxel =
+              (uint64_t(z) * uint64_t(grid.ny) + uint64_t(y)) * uint64_t(grid.nx) + uint64_t(x);
+          std::atomic_ref<uint64_t> word(grid.bits[voxel >> 6]);
+          const uint64_t bit = uint64_t(1) << (voxel & 63);
+          if (!(word.load(std::memory_order_relaxed) & bit))
+            word.fetch_or(bit, std::memory_order_relaxed);
+        }
+  });
+  return grid;
+}
+
+} // namespace uvr
