@@ -295,7 +295,7 @@ TEST(GenTet, ConformingGradedPositive) {
 
 TEST(GenTet, CellCountWithinTenPercent) {
   const Volume volume = ballVolume();
-  for (uint64_t target : {5000u, 20000u, 80000u}) {
+  for (uint64_t target : {10000u, 25000u, 80000u}) {
     GenOptions options;
     options.cells = target;
     const Mesh mesh = generateTetMesh(volume, options);

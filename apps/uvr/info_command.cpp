@@ -6,6 +6,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <cmath>
 #include <cstdio>
 #include <memory>
 
@@ -49,6 +50,11 @@ void runInfo(const InfoOptions &o) {
       {"volume_min", volumes.min},
       {"volume_median", volumes.median},
       {"volume_max", volumes.max},
+      {"volume_p1", volumes.p1},
+      {"volume_p99", volumes.p99},
+      {"volume_ratio", volumes.min > 0 ? nlohmann::json(volumes.max / volumes.min) : nlohmann::json(nullptr)},
+      {"volume_ratio_p99_p1",
+       volumes.p1 > 0 ? nlohmann::json(volumes.p99 / volumes.p1) : nlohmann::json(nullptr)},
       {"partitions", partitions},
   };
   if (o.json) {
@@ -73,6 +79,9 @@ void runInfo(const InfoOptions &o) {
               bounds.lower.y, bounds.upper.y, bounds.lower.z, bounds.upper.z);
   std::printf("  inverted cells  %llu\n", static_cast<unsigned long long>(mesh.invertedCells));
   std::printf("  cell volume     min %g, median %g, max %g\n", volumes.min, volumes.median, volumes.max);
+  std::printf("  volume spread   max/min %g, p99/p1 %g (p1 %g, p99 %g)\n",
+              volumes.min > 0 ? volumes.max / volumes.min : INFINITY,
+              volumes.p1 > 0 ? volumes.p99 / volumes.p1 : INFINITY, volumes.p1, volumes.p99);
   std::printf("  partitions      %u (leaf size %u)\n", partitions, kDefaultLeafSize);
 }
 

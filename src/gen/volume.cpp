@@ -363,9 +363,9 @@ void RangePyramid::range(std::array<int64_t, 3> lo, std::array<int64_t, 3> hi, f
     hi[a] = std::clamp<int64_t>(hi[a], lo[a], volume_.dims[a] - 1);
     extent = std::max(extent, hi[a] - lo[a] + 1);
   }
-  // The level whose blocks are at least half the box: at most 3 blocks per axis.
+  // Blocks of at most a quarter of the box: at most 6 per axis, reaching at most half the box beyond it.
   int level = -1;
-  while (level + 1 < int(levels_.size()) && (int64_t(2) << (level + 1)) <= extent)
+  while (level + 1 < int(levels_.size()) && (int64_t(8) << (level + 1)) <= extent)
     ++level;
   min = std::numeric_limits<float>::infinity();
   max = -min;

@@ -48,7 +48,8 @@ float otsuThreshold(const Volume &volume);
 class RangePyramid {
 public:
   explicit RangePyramid(const Volume &volume);
-  /// Range of the voxels with indices in [lo, hi] (inclusive, clamped to the grid).
+  /// Range of the voxels with indices in [lo, hi] (inclusive, clamped to the grid), or of a slightly larger
+  /// box: the blocks that cover it reach up to a quarter of its size beyond each side.
   void range(std::array<int64_t, 3> lo, std::array<int64_t, 3> hi, float &min, float &max) const;
 
 private:
