@@ -8,7 +8,7 @@
 //    of the brain, folds of the cortex) and coarse where they are uniform; τ sets how fine, continuously.
 //    (With the side to the first power, MRI texture gave almost uniform meshes: p99/p1 of the volumes 9 at 1M
 //    cells; with the cube root, 35.)
-// 2. τ is found by bisection on a count of the tree's leaves (a walk that stores nothing), then corrected
+// 2. τ is found by regula falsi on a count of the tree's leaves (a walk that stores nothing), then corrected
 //    by the exact count of the built mesh until that count is within 5 % of --cells.
 // 3. 2:1 balance over all 26 neighbours (a leaf at most one level coarser than any leaf it touches).
 // 4. Each leaf becomes tets conforming with its neighbours by a rule that depends only on the shared face:
@@ -295,6 +295,7 @@ private:
   std::vector<Node> topNodes(double tau) const;
   void chooseCoarseLevel();
   uint64_t estimateCells(double tau, uint64_t cap) const;
+  double searchTau(double goal, double start, double tauMax) const;
   bool keeps(uint64_t code, int level, const LocalTet &tet) const;
   void buildLeaves(double tau);
   void balance();
@@ -710,27 +711,62 @@ Mesh TetMesher::emit() {
   return mesh;
 }
 
+double TetMesher::searchTau(double goal, double start, double tauMax) const {
+  // The estimate falls as τ grows, roughly as a power of τ: regula falsi (Illinois) on log estimate against
+  // log τ, inside a bracket grown from `start`, needs far fewer walks than bisection.
+  const uint64_t cap = uint64_t(goal * 4.0) + 1024;
+  auto f = [&](double logTau) {
+    return std::log(double(estimateCells(std::exp(logTau), cap)) + 1.0) - std::log(goal);
+  };
+  const double logMin = std::log(tauMax * 1e-12), logMax = std::log(tauMax);
+  double a = std::max(logMin, std::log(start) - 1.0), b = std::min(logMax, std::log(start) + 1.0);
+  double fa = f(a), fb = f(b);
+  while (fa < 0 && a > logMin) { // too coarse at a: go finer
+    b = a;
+    fb = fa;
+    a = std::max(logMin, a - 4.0);
+    fa = f(a);
+  }
+  while (fb > 0 && b < logMax) { // too fine at b: go coarser
+    a = b;
+    fa = fb;
+    b = std::min(logMax, b + 4.0);
+    fb = f(b);
+  }
+  if (fa <= 0)
+    return std::exp(a);
+  if (fb >= 0)
+    return std::exp(b);
+  int side = 0;
+  for (int step = 0; step < 60 && b - a > 1e-7; ++step) {
+    const double c = (a * fb - b * fa) / (fb - fa);
+    const double fc = f(c);
+    if (std::fabs(fc) < 0.005)
+      return std::exp(c);
+    if (fc > 0) { // still too fine: the root lies above c
+      a = c;
+      fa = fc;
+      if (side == -1)
+        fb /= 2;
+      side = -1;
+    } else {
+      b = c;
+      fb = fc;
+      if (side == 1)
+        fa /= 2;
+      side = 1;
+    }
+  }
+  return std::exp(b);
+}
+
 Mesh TetMesher::run() {
   chooseCoarseLevel();
   const double target = double(options_.cells);
   const double tauMax = std::max(valueSpan_, 1e-30) * std::cbrt(double(kRootSide) * cellScale_) * 2.0;
   double goal = target, bestTau = 0, bestError = INFINITY, lastTau = 0;
   for (int round = 0; round < 8; ++round) {
-    // Smallest τ (finest mesh) whose estimate stays within the goal; estimates fall as τ grows.
-    double lo = tauMax * 1e-12, hi = tauMax, tau = tauMax;
-    const uint64_t cap = uint64_t(goal * 4.0) + 1024;
-    for (int step = 0; step < 60 && hi / lo > 1.0 + 1e-4; ++step) {
-      const double mid = std::sqrt(lo * hi);
-      const double estimate = double(estimateCells(mid, cap));
-      if (std::fabs(estimate - goal) < 0.005 * goal) {
-        tau = mid;
-        break;
-      }
-      if (estimate > goal)
-        lo = mid;
-      else
-        hi = tau = mid;
-    }
+    const double tau = searchTau(goal, lastTau > 0 ? lastTau : tauMax, tauMax);
     buildLeaves(tau);
     balance();
     lastTau = tau;
