@@ -353,25 +353,29 @@ std::vector<TetMesher::Node> TetMesher::topNodes(double tau) const {
 }
 
 void TetMesher::chooseCoarseLevel() {
-  // The coarsest level is the deepest whose nodes holding values above the threshold, ~28 tets each, stay
+  // The coarsest level is the deepest whose nodes holding values above the threshold, ~36 tets each, stay
   // under a sixteenth of the target: the rest of the budget goes to grading.
   std::vector<Node> level{{0, 0, 0, 0, false}};
   coarseLevel_ = 0;
   for (int l = 0; l + 1 < kMaxLevel; ++l) {
-    std::vector<Node> next;
-    for (const Node &n : level) {
+    // Children in fixed slots (8 per node, in order), filled in parallel, then compacted.
+    std::vector<Node> slots(8 * level.size());
+    tbb::parallel_for(size_t(0), level.size(), [&](size_t i) {
+      const Node &n = level[i];
       const int64_t half = side(l + 1);
       for (int c = 0; c < 8; ++c) {
-        const Node child{n.x + (c & 1) * half, n.y + (c >> 1 & 1) * half, n.z + (c >> 2) * half, l + 1,
-                         false};
-        if (!intersects(child.x, child.y, child.z))
-          continue;
-        float lo, hi;
-        range(child.x, child.y, child.z, l + 1, lo, hi);
-        if (hi >= threshold_)
-          next.push_back(child);
+        Node child{n.x + (c & 1) * half, n.y + (c >> 1 & 1) * half, n.z + (c >> 2) * half, l + 1, false};
+        float lo = 0, hi = -INFINITY;
+        if (intersects(child.x, child.y, child.z))
+          range(child.x, child.y, child.z, l + 1, lo, hi);
+        child.walk = hi >= threshold_; // marks the children kept
+        slots[8 * i + c] = child;
       }
-    }
+    });
+    std::vector<Node> next;
+    for (const Node &child : slots)
+      if (child.walk)
+        next.push_back(child);
     if (next.empty() || double(next.size()) * kTetsPerLeafGuess > double(options_.cells) / 16.0)
       break;
     level = std::move(next);
