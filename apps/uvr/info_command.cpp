@@ -104,11 +104,13 @@ void addInfoCommand(CLI::App &app) {
   CLI::App *cmd =
       app.add_subcommand("info", "Describe a mesh: cells, fields, bounds, cell volumes, partitions");
   cmd->add_option("MESH", options->mesh,
-                  "Mesh file (.vtu, .vtk, .msh, .umesh; a .pvd series or numbered files such as data_%d.vtu)")
+                  "Mesh file (.vtu, .vtk, .msh, .e, .ex2, .exo, .g, .umesh; a .pvd series or numbered files "
+                  "such as data_%d.vtu)")
       ->required();
-  cmd->add_option("--time-step", options->timeStep, "Time step of a series or of a Gmsh file's data, from 0")
-      ->capture_default_str();
   cmd->add_flag("--json", options->json, "Print JSON");
+  cmd->add_option("--time-step", options->timeStep,
+                  "Time step of a series, an Exodus file or a Gmsh file's data, from 0")
+      ->capture_default_str();
   cmd->callback([options] { runInfo(*options); });
 }
 

@@ -26,6 +26,10 @@ std::string lowerCaseExtension(const std::string &path) {
   return extension;
 }
 
+bool isExodus(const std::string &extension) {
+  return extension == ".e" || extension == ".ex2" || extension == ".exo" || extension == ".g";
+}
+
 /// The files of each time step of a series, in time order; empty when `path` is a single file.
 using Series = std::vector<std::vector<std::string>>;
 
@@ -155,7 +159,11 @@ UnstructuredGrid readGrid(const std::string &path, const LoadOptions &options, i
     return readVtkLegacy(path);
   if (extension == ".msh")
     return readGmsh(path, options, steps);
-  throw Error(path, "", "unknown mesh format '" + extension + "': expected .vtu, .vtk, .msh, .umesh or .pvd");
+  if (isExodus(extension))
+    return readExodus(path, options.timeStep);
+  throw Error(path, "",
+              "unknown mesh format '" + extension +
+                  "': expected .vtu, .vtk, .msh, .e, .ex2, .exo, .g, .umesh or .pvd");
 }
 
 /// Concatenates the parts of one time step: point indices of later parts are shifted past earlier ones.
@@ -203,7 +211,8 @@ Mesh loadMesh(const std::string &path, const LoadOptions &options) {
       throw Error(path, "", "time step " + std::to_string(options.timeStep) + " asked, the file has 1");
     return readUmesh(path);
   }
-  if (options.timeStep != 0 && lowerCaseExtension(path) != ".msh")
+  const std::string extension = lowerCaseExtension(path);
+  if (options.timeStep != 0 && extension != ".msh" && !isExodus(extension))
     throw Error(path, "", "time step " + std::to_string(options.timeStep) + " asked, the file has 1");
   return buildMesh(readGrid(path, options), path);
 }

@@ -6,7 +6,11 @@
 #include "io/file_buffer.h"
 #include "io/mesh_io.h"
 
+#ifdef UVR_HAVE_LIBDEFLATE
 #include <libdeflate.h>
+#else
+#include <zlib.h>
+#endif
 #include <pugixml.hpp>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -298,6 +302,29 @@ struct Payload {
 /// allocated).
 constexpr uint64_t maxZlibRatio = 1032;
 
+/// Inflates one zlib block of known sizes; returns what is wrong with it, or nullptr.
+const char *inflateBlock(const uint8_t *source, uint64_t sourceSize, uint8_t *target, uint64_t targetSize) {
+#ifdef UVR_HAVE_LIBDEFLATE
+  thread_local std::unique_ptr<libdeflate_decompressor, void (*)(libdeflate_decompressor *)> decompressor(
+      libdeflate_alloc_decompressor(), libdeflate_free_decompressor);
+  size_t inflated = 0;
+  const libdeflate_result result =
+      libdeflate_zlib_decompress(decompressor.get(), source, sourceSize, target, targetSize, &inflated);
+  if (result == LIBDEFLATE_BAD_DATA)
+    return "invalid zlib data";
+  if (result == LIBDEFLATE_INSUFFICIENT_SPACE)
+    return "it inflates to more bytes than its header says";
+#else
+  uLongf inflated = targetSize;
+  const int result = ::uncompress(target, &inflated, source, sourceSize);
+  if (result == Z_BUF_ERROR && inflated == targetSize)
+    return "it inflates to more bytes than its header says";
+  if (result != Z_OK)
+    return "invalid zlib data";
+#endif
+  return inflated == targetSize ? nullptr : "it inflates to fewer bytes than its header says";
+}
+
 class VtuReader {
 public:
   explicit VtuReader(const std::string &path) : path_(path), file_(readFile(path)) {}
@@ -554,20 +581,14 @@ private:
     const char *why = "";
     tbb::parallel_for(size_t(0), payload.blocks.size(), [&](size_t i) {
       const Payload::Block &block = payload.blocks[i];
-      thread_local std::unique_ptr<libdeflate_decompressor, void (*)(libdeflate_decompressor *)> decompressor(
-          libdeflate_alloc_decompressor(), libdeflate_free_decompressor);
-      size_t inflated = 0;
-      const libdeflate_result result =
-          libdeflate_zlib_decompress(decompressor.get(), payload.data + block.source, block.sourceSize,
-                                     dst + block.target, block.targetSize, &inflated);
-      if (result == LIBDEFLATE_SUCCESS && inflated == block.targetSize)
+      const char *problem =
+          inflateBlock(payload.data + block.source, block.sourceSize, dst + block.target, block.targetSize);
+      if (!problem)
         return;
       const std::lock_guard<std::mutex> lock(mutex);
       if (i < badBlock) {
         badBlock = i;
-        why = result == LIBDEFLATE_BAD_DATA             ? "invalid zlib data"
-              : result == LIBDEFLATE_INSUFFICIENT_SPACE ? "it inflates to more bytes than its header says"
-                                                        : "it inflates to fewer bytes than its header says";
+        why = problem;
       }
     });
     if (badBlock != UINT64_MAX)
