@@ -69,6 +69,29 @@ TEST(ColorMapFile, ReadsParaViewExportOfCoolToWarm) {
   EXPECT_EQ(file.opacityPoints, builtin.opacityPoints);
 }
 
+TEST(ColorMapFile, ListsPresetsWithRGBPoints) {
+  const std::vector<ColorMap> maps = readColorMapPresets(kPresets + "two_presets.json");
+  ASSERT_EQ(maps.size(), 2u); // the first preset is indexed colours only
+  EXPECT_EQ(maps[0].name, "Ramp with Points (test)");
+  EXPECT_EQ(maps[1].name, "Blue to Red HSV (test)");
+}
+
+TEST(ColorMapFile, WrittenPresetReadsBack) {
+  ColorMap map = readColorMapFile(kPresets + "two_presets.json", "Ramp with Points (test)");
+  map.name = "Edited";
+  map.opacityPoints = {0.f, 0.f, 0.5f, 0.f, 25.f, 0.75f, 0.25f, 1.f, 40.f, 0.1f, 0.5f, 0.f};
+  const std::string path = (std::filesystem::temp_directory_path() / "uvr_written_preset.json").string();
+  writeColorMapFile(path, map);
+  const ColorMap back = readColorMapFile(path, "Edited");
+  std::filesystem::remove(path);
+  EXPECT_EQ(back.rgbPoints, map.rgbPoints);
+  EXPECT_EQ(back.opacityPoints, map.opacityPoints);
+  EXPECT_EQ(back.colorSpace, map.colorSpace);
+  EXPECT_EQ(back.nanColor.x, map.nanColor.x);
+  EXPECT_EQ(back.nanColor.z, map.nanColor.z);
+  EXPECT_THROW(writeColorMapFile("/nonexistent-dir/x.json", map), Error);
+}
+
 TEST(ColorMapFile, ShippedBrainPresetsRead) {
   const std::string path = std::string(UVR_TEST_DATA) + "/../../data/presets/brain.json";
   for (const char *name : {"Brain Binary", "Brain Translucent"}) {

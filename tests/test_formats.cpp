@@ -2,6 +2,8 @@
 // laid out by hand from the formats' specifications, and malformed input.
 #include "core/error.h"
 #include "io/mesh_io.h"
+#include "mesh/mesh_stats.h"
+#include "mesh/mesh_view.h"
 #include "mesh/procedural_mesh.h"
 
 #include <gtest/gtest.h>
@@ -9,6 +11,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -269,4 +272,352 @@ TEST_F(Formats, UmeshOrderIsKeptWhenPointsAreNumberedByFirstUse) {
   const Mesh reordered = readUmesh(path("other.umesh"));
   EXPECT_NE(reordered.hexes, mesh.hexes);
   EXPECT_EQ(reordered.hexCount(), mesh.hexCount());
+}
+
+// ---- Gmsh ----
+
+namespace {
+
+const std::string kGmsh = std::string(UVR_TEST_DATA) + "/gmsh/";
+
+double totalVolume(const Mesh &mesh) {
+  const MeshView view = makeMeshView(mesh, -1);
+  double sum = 0.0;
+  for (uint64_t c = 0; c < mesh.cellCount(); ++c)
+    sum += cellVolume(view, c);
+  return sum;
+}
+
+template <typename T> std::string bin(T value) { return le(value); }
+
+/// One small mesh in each Gmsh encoding: sparse node tags 10..50, a triangle (skipped), two tets, a scalar
+/// $NodeData at two time steps (listed out of order) and a 3-component $ElementData.
+std::string gmshFile(bool version4, bool binary) {
+  const std::vector<std::array<double, 3>> xyz = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {1, 1, 1}};
+  const std::vector<uint64_t> tags = {10, 20, 30, 40, 50};
+  struct Element {
+    uint64_t tag;
+    int type;
+    std::vector<uint64_t> nodes;
+  };
+  const std::vector<Element> elements = {
+      {3, 2, {10, 20, 30}}, {7, 4, {10, 20, 30, 40}}, {9, 4, {20, 30, 40, 50}}};
+  std::ostringstream out;
+  out.precision(17);
+  out << "$MeshFormat\n" << (version4 ? "4.1" : "2.2") << " " << binary << " 8\n";
+  if (binary)
+    out << bin(int32_t(1)) << "\n";
+  out << "$EndMeshFormat\n$PhysicalNames\n1\n3 1 \"all\"\n$EndPhysicalNames\n";
+  auto size = [&](uint64_t v) {
+    if (binary && version4)
+      out << bin(v);
+    else
+      out << v << (version4 ? " " : "\n");
+  };
+  if (version4) {
+    out << "$Entities\n0 0 1 1\n1 0 0 0 1 1 0 0 0\n1 0 0 0 1 1 1 0 0\n$EndEntities\n$Nodes\n";
+    size(1), size(5), size(10), size(50);
+    if (binary)
+      out << bin(int32_t(3)) << bin(int32_t(1)) << bin(int32_t(0)) << bin(uint64_t(5));
+    else
+      out << "\n3 1 0 5\n";
+    for (uint64_t t : tags)
+      binary ? out << bin(t) : out << t << "\n";
+    for (const auto &p : xyz)
+      binary ? out << bin(p[0]) << bin(p[1]) << bin(p[2]) : out << p[0] << " " << p[1] << " " << p[2] << "\n";
+    out << (binary ? "\n" : "") << "$EndNodes\n$Elements\n";
+    size(2), size(3), size(3), size(9);
+    out << (binary ? "" : "\n");
+    for (int block = 0; block < 2; ++block) {
+      const size_t first = block == 0 ? 0 : 1, count = block == 0 ? 1 : 2;
+      const int type = elements[first].type;
+      if (binary)
+        out << bin(int32_t(type == 2 ? 2 : 3)) << bin(int32_t(1)) << bin(int32_t(type))
+            << bin(uint64_t(count));
+      else
+        out << (type == 2 ? 2 : 3) << " 1 " << type << " " << count << "\n";
+      for (size_t e = first; e < first + count; ++e) {
+        binary ? out << bin(elements[e].tag) : out << elements[e].tag;
+        for (uint64_t n : elements[e].nodes)
+          binary ? out << bin(n) : out << " " << n;
+        out << (binary ? "" : "\n");
+      }
+    }
+    out << (binary ? "\n" : "") << "$EndElements\n";
+  } else {
+    out << "$Nodes\n5\n";
+    for (size_t i = 0; i < xyz.size(); ++i)
+      binary ? out << bin(int32_t(tags[i])) << bin(xyz[i][0]) << bin(xyz[i][1]) << bin(xyz[i][2])
+             : out << tags[i] << " " << xyz[i][0] << " " << xyz[i][1] << " " << xyz[i][2] << "\n";
+    out << (binary ? "\n" : "") << "$EndNodes\n$Elements\n3\n";
+    if (binary) {
+      out << bin(int32_t(2)) << bin(int32_t(1)) << bin(int32_t(2)) << bin(int32_t(3)) << bin(int32_t(1))
+          << bin(int32_t(1));
+      for (uint64_t n : elements[0].nodes)
+        out << bin(int32_t(n));
+      out << bin(int32_t(4)) << bin(int32_t(2)) << bin(int32_t(2));
+      for (size_t e = 1; e < 3; ++e) {
+        out << bin(int32_t(elements[e].tag)) << bin(int32_t(1)) << bin(int32_t(1));
+        for (uint64_t n : elements[e].nodes)
+          out << bin(int32_t(n));
+      }
+      out << "\n";
+    } else {
+      for (const Element &e : elements) {
+        out << e.tag << " " << e.type << " 2 1 1";
+        for (uint64_t n : e.nodes)
+          out << " " << n;
+        out << "\n";
+      }
+    }
+    out << "$EndElements\n";
+  }
+  auto data = [&](const char *section, const char *name, int step, int components,
+                  const std::vector<std::pair<uint64_t, std::vector<double>>> &entries) {
+    out << "$" << section << "\n1\n\"" << name << "\"\n1\n"
+        << step * 0.5 << "\n3\n"
+        << step << "\n"
+        << components << "\n"
+        << entries.size() << "\n";
+    for (const auto &[tag, values] : entries) {
+      binary ? out << bin(int32_t(tag)) : out << tag;
+      for (double v : values)
+        binary ? out << bin(v) : out << " " << v;
+      out << (binary ? "" : "\n");
+    }
+    out << (binary ? "\n" : "") << "$End" << section << "\n";
+  };
+  for (int step : {1, 0}) {
+    std::vector<std::pair<uint64_t, std::vector<double>>> entries;
+    for (uint64_t t : tags)
+      entries.push_back({t, {double(t) * (step + 1)}});
+    data("NodeData", "temperature", step, 1, entries);
+  }
+  data("ElementData", "velocity", 0, 3, {{7, {3, 4, 0}}, {9, {0, 0, -2}}});
+  return out.str();
+}
+
+void expectSameGrid(const UnstructuredGrid &a, const UnstructuredGrid &b) {
+  EXPECT_TRUE(samePoints(a.points, b.points));
+  EXPECT_EQ(a.offsets, b.offsets);
+  EXPECT_EQ(a.connectivity, b.connectivity);
+  EXPECT_EQ(a.types, b.types);
+  ASSERT_EQ(a.fields.size(), b.fields.size());
+  for (size_t f = 0; f < a.fields.size(); ++f) {
+    EXPECT_EQ(a.fields[f].name, b.fields[f].name);
+    EXPECT_EQ(a.fields[f].values, b.fields[f].values) << a.fields[f].name;
+  }
+}
+
+} // namespace
+
+TEST(Gmsh, EncodingsOfAGmshMeshAgree) {
+  const char *files[] = {"mixed_22_ascii.msh", "mixed_22_binary.msh", "mixed_41_ascii.msh",
+                         "mixed_41_binary.msh"};
+  // The versions list elements in different orders; the meshes, ordered spatially, are the same.
+  const Mesh first = loadMesh(kGmsh + files[0]);
+  for (const char *file : files) {
+    SCOPED_TRACE(file);
+    const Mesh mesh = loadMesh(kGmsh + file);
+    expectSameMesh(first, mesh);
+    EXPECT_EQ(mesh.points.size(), 83u);
+    EXPECT_EQ(mesh.tetCount(), 55u);
+    EXPECT_EQ(mesh.hexCount(), 8u);
+    EXPECT_EQ(mesh.wedgeCount(), 28u);
+    EXPECT_EQ(mesh.pyramidCount(), 4u);
+    EXPECT_EQ(mesh.invertedCells, 0u); // Gmsh's prisms are mirrored into VTK's wedges on reading
+    EXPECT_NEAR(totalVolume(mesh), 1.5, 1e-5);
+  }
+}
+
+TEST(Gmsh, SecondOrderCellsByTheirCorners) {
+  const Mesh linear = loadMesh(kGmsh + "mixed_41_ascii.msh");
+  for (const char *file : {"mixed_order2_41_ascii.msh", "mixed_order2_22_binary.msh"}) {
+    SCOPED_TRACE(file);
+    const Mesh quadratic = loadMesh(kGmsh + file);
+    EXPECT_EQ(quadratic.tets, linear.tets);
+    EXPECT_EQ(quadratic.pyramids, linear.pyramids);
+    EXPECT_EQ(quadratic.wedges, linear.wedges);
+    EXPECT_EQ(quadratic.hexes, linear.hexes);
+    // Corners come first (numbered by first use); the mid-edge and face nodes follow, unused.
+    ASSERT_GT(quadratic.points.size(), linear.points.size());
+    EXPECT_EQ(
+        std::memcmp(quadratic.points.data(), linear.points.data(), linear.points.size() * sizeof(Vec3f)), 0);
+  }
+}
+
+TEST(Gmsh, SharedPetscMeshes) {
+  const std::string shared = std::string(UVR_SHARED_DATA) + "/small/";
+  const Mesh pyramids = loadMesh(shared + "petsc_pyr_tet.msh"); // format 4.1, ascii
+  EXPECT_EQ(pyramids.points.size(), 62u);
+  EXPECT_EQ(pyramids.tetCount(), 186u);
+  EXPECT_EQ(pyramids.pyramidCount(), 24u);
+  const Mesh wedges = loadMesh(shared + "petsc_hybrid_tetwedge.msh"); // format 2.2, ascii
+  EXPECT_EQ(wedges.points.size(), 120u);
+  EXPECT_EQ(wedges.tetCount(), 99u);
+  EXPECT_EQ(wedges.wedgeCount(), 99u);
+  EXPECT_EQ(wedges.invertedCells, 0u);
+  EXPECT_EQ(loadMesh(shared + "petsc_doublet-tet.msh").tetCount(), 2u);
+}
+
+TEST(Gmsh, FieldsAndTimeStepsInEveryEncoding) {
+  const fs::path dir = fs::temp_directory_path() / ("uvr_gmsh_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  UnstructuredGrid reference;
+  for (bool version4 : {false, true})
+    for (bool binary : {false, true}) {
+      SCOPED_TRACE(std::string(version4 ? "4.1" : "2.2") + (binary ? " binary" : " ascii"));
+      const std::string path = (dir / "fields.msh").string();
+      writeBytes(path, gmshFile(version4, binary));
+      int steps = 0;
+      const UnstructuredGrid grid = readGmsh(path, {}, &steps);
+      EXPECT_EQ(steps, 2);
+      EXPECT_EQ(grid.types, (std::vector<uint8_t>{5, 10, 10}));
+      EXPECT_EQ(grid.offsets, (std::vector<int64_t>{0, 0, 4, 8}));
+      EXPECT_EQ(grid.connectivity, (std::vector<int64_t>{0, 1, 2, 3, 1, 2, 3, 4}));
+      ASSERT_EQ(grid.fields.size(), 2u);
+      EXPECT_EQ(grid.fields[0].name, "temperature");
+      EXPECT_EQ(grid.fields[0].values, (std::vector<float>{10, 20, 30, 40, 50}));
+      EXPECT_EQ(grid.fields[1].name, "velocity");
+      EXPECT_EQ(grid.fields[1].centering, Centering::Cell);
+      EXPECT_EQ(grid.fields[1].values, (std::vector<float>{0, 5, 2}));
+      const UnstructuredGrid second = readGmsh(path, {1});
+      EXPECT_EQ(second.fields[0].values, (std::vector<float>{20, 40, 60, 80, 100}));
+      EXPECT_EQ(second.fields[1].values, grid.fields[1].values); // one step only: the same at every step
+      EXPECT_NE(errorOf([&] { readGmsh(path, {2}); }).find("time step 2 asked, the file has 2"),
+                std::string::npos);
+      const Mesh mesh = loadMesh(path, {1});
+      EXPECT_EQ(mesh.skippedCells, 1u);
+      EXPECT_EQ(mesh.tetCount(), 2u);
+      if (reference.points.empty())
+        reference = grid;
+      else
+        expectSameGrid(reference, grid);
+
+      // Cut anywhere (every byte of the head, a stride after), the file gives an error naming a byte, never
+      // a crash; only a cut just after a section after $Elements leaves a valid (shorter) file.
+      const std::string bytes = gmshFile(version4, binary);
+      const size_t elementsEnd = bytes.find("$EndElements\n") + 13;
+      for (size_t cut = 0; cut < bytes.size(); cut += cut < 160 ? 1 : 5) {
+        const std::string prefix = bytes.substr(0, cut);
+        writeBytes(path, prefix);
+        const std::string error = errorOf([&] { readGmsh(path); });
+        const std::string trimmed = prefix.ends_with("\n") ? prefix.substr(0, prefix.size() - 1) : prefix;
+        const std::string lastLine = trimmed.substr(trimmed.rfind('\n') + 1);
+        const bool sectionEnd =
+            lastLine == "$EndElements" || lastLine == "$EndNodeData" || lastLine == "$EndElementData";
+        if (cut + 1 >= elementsEnd && sectionEnd)
+          EXPECT_EQ(error, "") << "cut at " << cut;
+        else
+          EXPECT_NE(error.find(path + ", byte "), std::string::npos) << "cut at " << cut << ": " << error;
+      }
+    }
+  fs::remove_all(dir);
+}
+
+TEST_F(Formats, GmshOversizedCountsAndUnknownNodes) {
+  const std::string head = "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n";
+  writeBytes(path("huge.msh"), head + "$Nodes\n99999999999\n1 0 0 0\n$EndNodes\n");
+  std::string error = errorOf([&] { readGmsh(path("huge.msh")); });
+  EXPECT_NE(error.find(", byte 42: 99999999999 nodes declared"), std::string::npos) << error;
+
+  writeBytes(path("binary.msh"), "$MeshFormat\n4.1 1 8\n" + bin(int32_t(1)) + "\n$EndMeshFormat\n$Nodes\n" +
+                                     bin(uint64_t(1)) + bin(uint64_t(1) << 60) + bin(uint64_t(1)) +
+                                     bin(uint64_t(1)) + "\n$EndNodes\n");
+  error = errorOf([&] { readGmsh(path("binary.msh")); });
+  EXPECT_NE(error.find(std::to_string(uint64_t(1) << 60) + " nodes declared"), std::string::npos) << error;
+
+  writeBytes(path("unknown.msh"), head + "$Nodes\n4\n1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 1\n$EndNodes\n"
+                                         "$Elements\n1\n1 4 0 1 2 3 5\n$EndElements\n");
+  error = errorOf([&] { loadMesh(path("unknown.msh")); });
+  EXPECT_NE(error.find("element 1 names node 5, which $Nodes does not list"), std::string::npos) << error;
+
+  writeBytes(path("type.msh"),
+             head + "$Nodes\n1\n1 0 0 0\n$EndNodes\n$Elements\n1\n1 99 0 1\n$EndElements\n");
+  error = errorOf([&] { loadMesh(path("type.msh")); });
+  EXPECT_NE(error.find("unsupported Gmsh element type 99"), std::string::npos) << error;
+}
+
+// ---- Time series ----
+
+namespace {
+
+/// A mesh of one tet whose point field "f" is `value` everywhere.
+Mesh tetWithValue(float value) {
+  UnstructuredGrid grid;
+  grid.points = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  grid.offsets = {0, 4};
+  grid.connectivity = {0, 1, 2, 3};
+  grid.types = {10};
+  grid.fields = {{"f", Centering::Point, std::vector<float>(4, value)}};
+  return buildMesh(std::move(grid), "tet");
+}
+
+} // namespace
+
+TEST_F(Formats, PvdCollectionTimeSteps) {
+  for (int i : {0, 1, 2})
+    writeVtu(path("step" + std::to_string(i) + ".vtu"), tetWithValue(float(i)));
+  fs::create_directories(dir_ / "parts");
+  writeVtu(path("parts/a.vtu"), tetWithValue(7.f));
+  writeVtu(path("parts/b.vtu"), tetWithValue(8.f));
+  // Listed out of time order; the step at t = 0.5 has two parts, which are merged.
+  std::ofstream(path("series.pvd"))
+      << "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n"
+         "<Collection>\n"
+         "<DataSet timestep=\"2\" part=\"0\" file=\"step2.vtu\"/>\n"
+         "<DataSet timestep=\"0\" part=\"0\" file=\"step0.vtu\"/>\n"
+         "<DataSet timestep=\"0.5\" part=\"0\" file=\"parts/a.vtu\"/>\n"
+         "<DataSet timestep=\"0.5\" part=\"1\" file=\"parts/b.vtu\"/>\n"
+         "<DataSet timestep=\"1\" part=\"0\" file=\"step1.vtu\"/>\n"
+         "</Collection>\n</VTKFile>\n";
+  EXPECT_EQ(timeStepCount(path("series.pvd")), 4);
+  EXPECT_EQ(loadMesh(path("series.pvd")).fields[0].values, std::vector<float>(4, 0.f));
+  const Mesh merged = loadMesh(path("series.pvd"), {1});
+  EXPECT_EQ(merged.tetCount(), 2u);
+  EXPECT_EQ(merged.points.size(), 8u);
+  std::vector<float> values = merged.fields[0].values;
+  std::sort(values.begin(), values.end());
+  EXPECT_EQ(values, (std::vector<float>{7, 7, 7, 7, 8, 8, 8, 8}));
+  EXPECT_EQ(loadMesh(path("series.pvd"), {2}).fields[0].values, std::vector<float>(4, 1.f));
+  EXPECT_EQ(loadMesh(path("series.pvd"), {3}).fields[0].values, std::vector<float>(4, 2.f));
+  const std::string error = errorOf([&] { loadMesh(path("series.pvd"), {4}); });
+  EXPECT_NE(error.find("time step 4 asked, the series has 4 (0 to 3)"), std::string::npos) << error;
+}
+
+TEST_F(Formats, NumberedFileTimeSteps) {
+  // Numbers sort by value (2 before 10), with or without zero padding.
+  for (int i : {10, 2, 0})
+    writeVtu(path("data_" + std::to_string(i) + ".vtu"), tetWithValue(float(i)));
+  writeVtu(path("other.vtu"), tetWithValue(-1.f));
+  for (const std::string pattern : {"data_%d.vtu", "data_*.vtu"}) {
+    SCOPED_TRACE(pattern);
+    EXPECT_EQ(timeStepCount(path(pattern)), 3);
+    EXPECT_EQ(loadMesh(path(pattern), {1}).fields[0].values, std::vector<float>(4, 2.f));
+    EXPECT_EQ(loadMesh(path(pattern), {2}).fields[0].values, std::vector<float>(4, 10.f));
+  }
+  for (int i : {1, 3})
+    saveMesh(path("padded_" + std::string(i < 10 ? "000" : "00") + std::to_string(i) + ".umesh"),
+             tetWithValue(float(i)));
+  EXPECT_EQ(loadMesh(path("padded_%04d.umesh"), {1}).fields[0].values, std::vector<float>(4, 3.f));
+  EXPECT_EQ(timeStepCount(path("data_0.vtu")), 1);
+  EXPECT_NE(errorOf([&] { loadMesh(path("none_%d.vtu")); }).find("no file matches this pattern"),
+            std::string::npos);
+  EXPECT_NE(errorOf([&] { loadMesh(path("data_0.vtu"), {1}); }).find("time step 1 asked, the file has 1"),
+            std::string::npos);
+}
+
+TEST_F(Formats, GmshFieldWithFewerTimeSteps) {
+  auto nodeData = [](const char *name, int step) {
+    return std::string("$NodeData\n1\n\"") + name + "\"\n0\n3\n" + std::to_string(step) +
+           "\n1\n4\n1 0\n2 0\n3 0\n4 " + std::to_string(step) + "\n$EndNodeData\n";
+  };
+  writeBytes(path("steps.msh"), "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n4\n1 0 0 0\n2 1 0 0\n3 0 1 0\n"
+                                "4 0 0 1\n$EndNodes\n$Elements\n1\n1 4 0 1 2 3 4\n$EndElements\n" +
+                                    nodeData("a", 0) + nodeData("a", 1) + nodeData("a", 2) +
+                                    nodeData("b", 0) + nodeData("b", 1));
+  EXPECT_EQ(timeStepCount(path("steps.msh")), 3);
+  EXPECT_EQ(loadMesh(path("steps.msh"), {1}).fields[1].values.size(), 4u);
+  const std::string error = errorOf([&] { loadMesh(path("steps.msh"), {2}); });
+  EXPECT_NE(error.find("field 'b' has 2 time steps, step 2 asked"), std::string::npos) << error;
 }

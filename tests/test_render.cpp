@@ -1,11 +1,14 @@
 // Whole-frame properties of the integrator: analytic transmittance, equivalence of the modes, no cracks at
 // partition boundaries, independence of cell winding.
+#include "core/error.h"
 #include "mesh/procedural_mesh.h"
 #include "render/renderer.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <string>
+#include <vector>
 
 using namespace uvr;
 
@@ -40,8 +43,26 @@ Camera obliqueCamera() {
   return camera;
 }
 
+/// The backends this machine can run: the CPU always, CUDA where it was built and a GPU is present.
+std::vector<Backend> availableBackends() {
+  std::vector<Backend> backends{Backend::Cpu};
+  try {
+    const Mesh mesh = buildMesh(makeBoxGrid(CellType::Tetra, 1, kBox, [](Vec3f) { return 0.f; }), "probe");
+    Renderer renderer(mesh, 0);
+    renderer.setTransferFunction(TransferFunction(constantMap(0.5f), 0.f, 1.f));
+    renderer.prepare(parseBackend("cuda"));
+    backends.push_back(Backend::Cuda);
+  } catch (const Error &) {
+  }
+  return backends;
+}
+
+// The backend the current test renders with.
+Backend gBackend = Backend::Cpu;
+
 RenderSettings settingsFor(RenderMode mode, float s1, float s2 = 0.f) {
   RenderSettings settings;
+  settings.backend = gBackend;
   settings.width = settings.height = 64;
   settings.integrator.mode = mode;
   settings.integrator.s1 = s1;
@@ -63,9 +84,20 @@ void expectSameFrame(const Frame &a, const Frame &b, float opacityTolerance, int
   EXPECT_LE(worstByte, byteTolerance);
 }
 
+class Integrator : public testing::TestWithParam<Backend> {
+protected:
+  void SetUp() override { gBackend = GetParam(); }
+};
+
 } // namespace
 
-TEST(Integrator, ConstantFieldGivesExponentialTransmittance) {
+// Every integrator test runs on each backend the machine has, so CUDA is held to the same analytic results.
+INSTANTIATE_TEST_SUITE_P(Backends, Integrator, testing::ValuesIn(availableBackends()),
+                         [](const testing::TestParamInfo<Backend> &info) {
+                           return std::string(backendName(info.param));
+                         });
+
+TEST_P(Integrator, ConstantFieldGivesExponentialTransmittance) {
   const Mesh mesh = buildMesh(makeBoxGrid(CellType::Tetra, 8, kBox, [](Vec3f) { return 0.5f; }), "box");
   Renderer renderer(mesh, mesh.findField("f"), 64);
   const float alphaPerUnit = 0.3f;
@@ -94,7 +126,7 @@ TEST(Integrator, ConstantFieldGivesExponentialTransmittance) {
   }
 }
 
-TEST(Integrator, SkippingChangesNoContributingSample) {
+TEST_P(Integrator, SkippingChangesNoContributingSample) {
   const Mesh mesh = buildMesh(makeBoxGrid(CellType::Tetra, 12, kBox, radial, 0.25f), "box");
   Renderer renderer(mesh, mesh.findField("f"), 32);
   renderer.setTransferFunction(TransferFunction(rampMap(), 0.f, 1.f));
@@ -117,7 +149,7 @@ TEST(Integrator, SkippingChangesNoContributingSample) {
   expectSameFrame(skip, coarse, 0.05f, 16);
 }
 
-TEST(Integrator, NoCracksAtPartitionBoundaries) {
+TEST_P(Integrator, NoCracksAtPartitionBoundaries) {
   for (CellType type : {CellType::Tetra, CellType::Hexahedron}) {
     const Mesh mesh = buildMesh(makeBoxGrid(type, 10, kBox, [](Vec3f) { return 0.5f; }), "box");
     Renderer one(mesh, mesh.findField("f"), 1u << 30);
@@ -155,7 +187,7 @@ TEST(Integrator, NoCracksAtPartitionBoundaries) {
   }
 }
 
-TEST(Integrator, WindingDoesNotChangeTheImage) {
+TEST_P(Integrator, WindingDoesNotChangeTheImage) {
   const UnstructuredGrid grid = makeBoxGrid(CellType::Hexahedron, 6, kBox, radial, 0.2f);
   auto reversed = [&](bool every) {
     UnstructuredGrid copy = grid;

@@ -15,6 +15,7 @@ struct ConvertOptions {
   std::string output;
   std::vector<std::string> fields;
   bool zlib = false;
+  int timeStep = 0;
 };
 
 /// Keeps the named fields in the order given; all of them when none is named.
@@ -37,7 +38,7 @@ void chooseFields(Mesh &mesh, const std::vector<std::string> &names, const std::
 }
 
 void runConvert(const ConvertOptions &o) {
-  Mesh mesh = loadMesh(o.input);
+  Mesh mesh = loadMesh(o.input, {o.timeStep});
   chooseFields(mesh, o.fields, o.input);
   if (o.zlib) {
     if (!o.output.ends_with(".vtu") && !o.output.ends_with(".VTU"))
@@ -55,12 +56,18 @@ void runConvert(const ConvertOptions &o) {
 void addConvertCommand(CLI::App &app) {
   auto options = std::make_shared<ConvertOptions>();
   CLI::App *cmd = app.add_subcommand("convert", "Convert a mesh to another format (.vtu, .umesh)");
-  cmd->add_option("IN", options->input, "Mesh file to read (.vtu, .vtk, .umesh)")->required();
+  cmd->add_option("IN", options->input,
+                  "Mesh to read (.vtu, .vtk, .msh, .e, .ex2, .exo, .g, .umesh; a .pvd series or numbered "
+                  "files such as data_%d.vtu)")
+      ->required();
   cmd->add_option("OUT", options->output, "Mesh file to write (.vtu, .umesh)")->required();
   cmd->add_option("--field", options->fields, "Field to keep (repeat the option for several; default: all)")
       ->expected(1)
       ->allow_extra_args(false)
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+  cmd->add_option("--time-step", options->timeStep,
+                  "Time step of a series, an Exodus file or a Gmsh file's data, from 0")
+      ->capture_default_str();
   cmd->add_flag("--zlib", options->zlib, "Compress the .vtu arrays with zlib");
   cmd->callback([options] { runConvert(*options); });
 }

@@ -12,6 +12,7 @@ int main(int argc, char **argv) {
   uvr::addInfoCommand(app);
   uvr::addCompareCommand(app);
   uvr::addConvertCommand(app);
+  uvr::addViewCommand(app);
   uvr::addGenCommand(app);
   try {
     app.parse(argc, argv);

@@ -87,7 +87,7 @@ OccupancyGrid buildOccupancyGrid(const MeshView &mesh, float voxelsPerCell) {
     voxelRange(box.lower.y, box.upper.y, grid.origin.y, grid.voxelsPerUnit.y, grid.ny, y0, y1);
     voxelRange(box.lower.z, box.upper.z, grid.origin.z, grid.voxelsPerUnit.z, grid.nz, z0, z1);
     // A tet fills a sixth of its box or less: voxels wholly beyond one of its face planes stay clear.
-    TetPlanes planes;
+    TetPlanes planes{};
     const bool tet = c < mesh.tetCount && planes.set(mesh, c);
     for (int z = z0; z <= z1; ++z)
       for (int y = y0; y <= y1; ++y)

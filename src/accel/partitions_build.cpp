@@ -118,7 +118,10 @@ Partitions buildPartitions(const MeshView &mesh, uint32_t leafSize) {
                         if (!mesh.values) {
                           info.valueMin = info.valueMax = 0.f; // geometry alone, e.g. to count partitions
                         } else if (mesh.cellCentered) {
-                          info.valueMin = info.valueMax = mesh.values[c];
+                          // A NaN cell has no value to draw: an empty range, which the leaf's min/max ignore.
+                          const float value = mesh.values[c];
+                          info.valueMin = value == value ? value : INFINITY;
+                          info.valueMax = value == value ? value : -INFINITY;
                         } else {
                           info.valueMin = INFINITY;
                           info.valueMax = -INFINITY;

@@ -1,12 +1,19 @@
 #include "core/error.h"
 #include "io/mesh_io.h"
 
+#include <pugixml.hpp>
+
 #include <algorithm>
 #include <cctype>
+#include <charconv>
+#include <filesystem>
+#include <regex>
 
 namespace uvr {
 
 namespace {
+
+namespace fs = std::filesystem;
 
 std::string lowerCaseExtension(const std::string &path) {
   const size_t slash = path.find_last_of('/');
@@ -19,17 +26,207 @@ std::string lowerCaseExtension(const std::string &path) {
   return extension;
 }
 
-} // namespace
+bool isExodus(const std::string &extension) {
+  return extension == ".e" || extension == ".ex2" || extension == ".exo" || extension == ".g";
+}
 
-Mesh loadMesh(const std::string &path) {
+/// The files of each time step of a series, in time order; empty when `path` is a single file.
+using Series = std::vector<std::vector<std::string>>;
+
+Series readPvd(const std::string &path) {
+  pugi::xml_document doc;
+  const pugi::xml_parse_result result = doc.load_file(path.c_str());
+  if (!result)
+    throw Error(path, "byte " + std::to_string(std::max<ptrdiff_t>(result.offset, 0)),
+                std::string("malformed XML: ") + result.description());
+  const pugi::xml_node collection = doc.child("VTKFile").child("Collection");
+  if (std::string_view(doc.child("VTKFile").attribute("type").value()) != "Collection" || !collection)
+    throw Error(path, "", "expected <VTKFile type=\"Collection\"> with a <Collection>");
+  struct DataSet {
+    double time;
+    std::string file;
+  };
+  std::vector<DataSet> dataSets;
+  const fs::path directory = fs::path(path).parent_path();
+  for (pugi::xml_node node : collection.children("DataSet")) {
+    const std::string file = node.attribute("file").value();
+    if (file.empty())
+      throw Error(path, "byte " + std::to_string(node.offset_debug()), "<DataSet> without a file attribute");
+    dataSets.push_back({node.attribute("timestep").as_double(0.0),
+                        fs::path(file).is_absolute() ? file : (directory / file).string()});
+  }
+  if (dataSets.empty())
+    throw Error(path, "", "the collection lists no <DataSet>");
+  std::stable_sort(dataSets.begin(), dataSets.end(),
+                   [](const DataSet &a, const DataSet &b) { return a.time < b.time; });
+  Series series;
+  for (size_t i = 0; i < dataSets.size(); ++i) {
+    if (i == 0 || dataSets[i].time != dataSets[i - 1].time)
+      series.emplace_back();
+    series.back().push_back(dataSets[i].file);
+  }
+  return series;
+}
+
+/// Compares names by their text, and embedded numbers by value: data_2 before data_10.
+bool naturalLess(const std::string &a, const std::string &b) {
+  size_t i = 0, j = 0;
+  while (i < a.size() && j < b.size()) {
+    if (std::isdigit(static_cast<unsigned char>(a[i])) && std::isdigit(static_cast<unsigned char>(b[j]))) {
+      size_t iEnd = i, jEnd = j;
+      while (iEnd < a.size() && std::isdigit(static_cast<unsigned char>(a[iEnd])))
+        ++iEnd;
+      while (jEnd < b.size() && std::isdigit(static_cast<unsigned char>(b[jEnd])))
+        ++jEnd;
+      const std::string_view x = std::string_view(a).substr(i, iEnd - i),
+                             y = std::string_view(b).substr(j, jEnd - j);
+      const std::string_view xs = x.substr(std::min(x.find_first_not_of('0'), x.size()));
+      const std::string_view ys = y.substr(std::min(y.find_first_not_of('0'), y.size()));
+      if (xs.size() != ys.size())
+        return xs.size() < ys.size();
+      if (xs != ys)
+        return xs < ys;
+      i = iEnd;
+      j = jEnd;
+    } else {
+      if (a[i] != b[j])
+        return a[i] < b[j];
+      ++i;
+      ++j;
+    }
+  }
+  return a.size() - i < b.size() - j;
+}
+
+/// Files matching a name pattern with %d, %0Nd, * or ?: a series of one file per step.
+Series readPattern(const std::string &path) {
+  const fs::path pattern(path);
+  const std::string name = pattern.filename().string();
+  std::string expression;
+  for (size_t i = 0; i < name.size(); ++i) {
+    const char c = name[i];
+    if (c == '%') {
+      size_t j = i + 1;
+      while (j < name.size() && std::isdigit(static_cast<unsigned char>(name[j])))
+        ++j;
+      if (j < name.size() && name[j] == 'd') {
+        expression += "[0-9]+";
+        i = j;
+        continue;
+      }
+    }
+    if (c == '*')
+      expression += ".*";
+    else if (c == '?')
+      expression += ".";
+    else if (std::isalnum(static_cast<unsigned char>(c)))
+      expression += c;
+    else
+      expression += std::string("\\") + c;
+  }
+  const std::regex matcher(expression);
+  const fs::path directory = pattern.has_parent_path() ? pattern.parent_path() : fs::path(".");
+  std::error_code ec;
+  std::vector<std::string> names;
+  for (const fs::directory_entry &entry : fs::directory_iterator(directory, ec))
+    if (entry.is_regular_file() && std::regex_match(entry.path().filename().string(), matcher))
+      names.push_back(entry.path().filename().string());
+  if (ec)
+    throw Error(path, "", "cannot list " + directory.string() + ": " + ec.message());
+  if (names.empty())
+    throw Error(path, "", "no file matches this pattern");
+  std::sort(names.begin(), names.end(), naturalLess);
+  Series series;
+  for (const std::string &file : names)
+    series.push_back({(pattern.has_parent_path() ? (directory / file) : fs::path(file)).string()});
+  return series;
+}
+
+Series seriesOf(const std::string &path) {
+  if (lowerCaseExtension(path) == ".pvd")
+    return readPvd(path);
+  const std::string name = fs::path(path).filename().string();
+  if (name.find_first_of("*?%") != std::string::npos && !fs::exists(path))
+    return readPattern(path);
+  return {};
+}
+
+UnstructuredGrid readGrid(const std::string &path, const LoadOptions &options, int *steps = nullptr) {
   const std::string extension = lowerCaseExtension(path);
   if (extension == ".vtu")
-    return buildMesh(readVtu(path), path);
+    return readVtu(path);
   if (extension == ".vtk")
-    return buildMesh(readVtkLegacy(path), path);
-  if (extension == ".umesh")
+    return readVtkLegacy(path);
+  if (extension == ".msh")
+    return readGmsh(path, options, steps);
+  if (isExodus(extension))
+    return readExodus(path, options.timeStep);
+  throw Error(path, "",
+              "unknown mesh format '" + extension +
+                  "': expected .vtu, .vtk, .msh, .e, .ex2, .exo, .g, .umesh or .pvd");
+}
+
+/// Concatenates the parts of one time step: point indices of later parts are shifted past earlier ones.
+UnstructuredGrid mergeParts(const std::vector<std::string> &files) {
+  UnstructuredGrid all = readGrid(files[0], {});
+  for (size_t f = 1; f < files.size(); ++f) {
+    UnstructuredGrid part = readGrid(files[f], {});
+    bool sameFields = part.fields.size() == all.fields.size();
+    for (size_t i = 0; sameFields && i < all.fields.size(); ++i)
+      sameFields =
+          part.fields[i].name == all.fields[i].name && part.fields[i].centering == all.fields[i].centering;
+    if (!sameFields)
+      throw Error(files[f], "", "this part has other fields than " + files[0]);
+    const auto pointBase = int64_t(all.points.size());
+    const int64_t connectivityBase = all.offsets.back();
+    all.points.insert(all.points.end(), part.points.begin(), part.points.end());
+    for (size_t i = 1; i < part.offsets.size(); ++i)
+      all.offsets.push_back(part.offsets[i] + connectivityBase);
+    for (int64_t index : part.connectivity)
+      all.connectivity.push_back(index + pointBase);
+    all.types.insert(all.types.end(), part.types.begin(), part.types.end());
+    for (size_t i = 0; i < all.fields.size(); ++i)
+      all.fields[i].values.insert(all.fields[i].values.end(), part.fields[i].values.begin(),
+                                  part.fields[i].values.end());
+  }
+  return all;
+}
+
+} // namespace
+
+Mesh loadMesh(const std::string &path, const LoadOptions &options) {
+  const Series series = seriesOf(path);
+  if (!series.empty()) {
+    if (options.timeStep < 0 || size_t(options.timeStep) >= series.size())
+      throw Error(path, "",
+                  "time step " + std::to_string(options.timeStep) + " asked, the series has " +
+                      std::to_string(series.size()) + " (0 to " + std::to_string(series.size() - 1) + ")");
+    const std::vector<std::string> &files = series[size_t(options.timeStep)];
+    if (files.size() == 1)
+      return loadMesh(files[0]);
+    return buildMesh(mergeParts(files), path);
+  }
+  if (lowerCaseExtension(path) == ".umesh") {
+    if (options.timeStep != 0)
+      throw Error(path, "", "time step " + std::to_string(options.timeStep) + " asked, the file has 1");
     return readUmesh(path);
-  throw Error(path, "", "unknown mesh format '" + extension + "': expected .vtu, .vtk or .umesh");
+  }
+  const std::string extension = lowerCaseExtension(path);
+  if (options.timeStep != 0 && extension != ".msh" && !isExodus(extension))
+    throw Error(path, "", "time step " + std::to_string(options.timeStep) + " asked, the file has 1");
+  return buildMesh(readGrid(path, options), path);
+}
+
+int timeStepCount(const std::string &path) {
+  const Series series = seriesOf(path);
+  if (!series.empty())
+    return int(series.size());
+  if (lowerCaseExtension(path) == ".msh") {
+    int steps = 1;
+    readGmsh(path, {}, &steps);
+    return steps;
+  }
+  return 1;
 }
 
 void saveMesh(const std::string &path, const Mesh &mesh) {

@@ -7,6 +7,12 @@
 
 namespace uvr {
 
+/// What a load may choose beyond the file: formats with time steps (Exodus, Gmsh data, series) read step
+/// `timeStep` (0-based).
+struct LoadOptions {
+  int timeStep = 0;
+};
+
 /// VTK XML unstructured grid: ascii, inline base64, appended raw or base64; zlib; UInt32/UInt64 headers;
 /// several Pieces (merged).
 UnstructuredGrid readVtu(const std::string &path);
@@ -14,6 +20,17 @@ UnstructuredGrid readVtu(const std::string &path);
 /// Legacy VTK unstructured grid: ascii or big-endian binary; `CELLS n size` and the 5.1 OFFSETS/CONNECTIVITY
 /// layout; POINT_DATA and CELL_DATA with SCALARS and FIELD arrays.
 UnstructuredGrid readVtkLegacy(const std::string &path);
+
+/// Gmsh .msh, formats 2.2 and 4.1, ascii and binary. Volume elements of any order (by their corners; one
+/// line on stderr says so), lower-dimensional ones for buildMesh to skip; $NodeData and $ElementData at
+/// `options.timeStep` (the n-th distinct time-step index of each field). Sets `*timeStepCount` if given.
+UnstructuredGrid readGmsh(const std::string &path, const LoadOptions &options = {},
+                          int *timeStepCount = nullptr);
+
+/// Exodus II (netCDF-3 or netCDF-4): element blocks of volume types merged, nodal variables and element
+/// variables (per block, merged) at time step `timeStep` (0-based). Throws uvr::Error when uvr was built
+/// without netCDF.
+UnstructuredGrid readExodus(const std::string &path, int timeStep);
 
 /// The binary format of Wald's umesh library (UMesh::saveTo): vertices, named per-vertex scalars and the
 /// cells of each type, little-endian, read straight into place. Cells are checked and wound as VTK expects;
@@ -30,7 +47,14 @@ void writeUmesh(const std::string &path, const Mesh &mesh);
 void writeVtu(const std::string &path, const Mesh &mesh, bool compress = false);
 
 /// Reads any supported format and builds the mesh. Throws uvr::Error naming the file and position.
-Mesh loadMesh(const std::string &path);
+/// Besides single files, `path` may name a time series: a ParaView .pvd collection (its DataSets sorted by
+/// timestep; several parts of one step are merged), or files numbered by a pattern such as data_%d.vtu,
+/// data_%04d.vtu or data_*.vtu (sorted by their numbers). `options.timeStep` picks the step.
+Mesh loadMesh(const std::string &path, const LoadOptions &options = {});
+
+/// The number of time steps `path` holds: of a series or a Gmsh file's data; 1 otherwise (Exodus too, for
+/// now).
+int timeStepCount(const std::string &path);
 
 /// Writes `mesh` in the format its extension names (.umesh, .vtu).
 void saveMesh(const std::string &path, const Mesh &mesh);

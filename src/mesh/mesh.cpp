@@ -136,9 +136,17 @@ int Mesh::findField(const std::string &name) const {
 }
 
 Mesh buildMesh(UnstructuredGrid &&grid, const std::string &source) {
+  return buildMesh(std::move(grid.points), CellArraysView{grid.offsets, grid.connectivity, grid.types},
+                   std::move(grid.fields), source);
+}
+
+Mesh buildMesh(std::vector<Vec3f> &&points, CellArraysView grid, std::vector<ScalarField> &&fields,
+               const std::string &source) {
   const size_t cellCount = grid.types.size();
   if (grid.offsets.size() != cellCount + 1)
     throw Error(source, "", "cell offsets and cell types disagree in count");
+  if (grid.offsets[0] != 0 || uint64_t(grid.offsets[cellCount]) > grid.connectivity.size())
+    throw Error(source, "", "cell offsets do not span the connectivity array");
 
   Mesh mesh;
   std::array<uint64_t, 4> perType{}; // tets, pyramids, wedges, hexes
@@ -159,6 +167,8 @@ Mesh buildMesh(UnstructuredGrid &&grid, const std::string &source) {
   for (size_t c = 0; c < cellCount; ++c) {
     CellKind kind;
     const uint8_t vtkType = grid.types[c];
+    if (grid.offsets[c + 1] < grid.offsets[c])
+      throw Error(source, "cell " + std::to_string(c), "cell offsets decrease");
     if (volumeKind(vtkType, kind)) {
       if (grid.offsets[c + 1] - grid.offsets[c] < kind.corners)
         throw Error(source, "cell " + std::to_string(c),
@@ -172,7 +182,7 @@ Mesh buildMesh(UnstructuredGrid &&grid, const std::string &source) {
                   "unsupported VTK cell type " + std::to_string(vtkType));
     }
   }
-  if (grid.points.size() > UINT32_MAX)
+  if (points.size() > UINT32_MAX)
     throw Error(source, "", "more than 2^32 points are not supported");
 
   mesh.tets.resize(perType[0] * 4);
@@ -194,24 +204,24 @@ Mesh buildMesh(UnstructuredGrid &&grid, const std::string &source) {
     uint32_t *v = cursor[s];
     const int64_t *ids = &grid.connectivity[size_t(grid.offsets[c])];
     for (int i = 0; i < kind.corners; ++i) {
-      if (ids[i] < 0 || uint64_t(ids[i]) >= grid.points.size())
+      if (ids[i] < 0 || uint64_t(ids[i]) >= points.size())
         throw Error(source, "cell " + std::to_string(c),
                     "point index " + std::to_string(ids[i]) + " outside [0, " +
-                        std::to_string(grid.points.size()) + ")");
+                        std::to_string(points.size()) + ")");
       v[i] = uint32_t(ids[i]);
     }
     if (grid.types[c] == 11) { // voxel corners run in x-fastest lattice order
       std::swap(v[2], v[3]);
       std::swap(v[6], v[7]);
     }
-    if (orientCell(kind.type, v, grid.points))
+    if (orientCell(kind.type, v, points))
       ++mesh.invertedCells;
     cursor[s] += kind.corners;
     fileToMesh[c] = next[s]++;
   }
 
-  mesh.points = std::move(grid.points);
-  for (ScalarField &field : grid.fields) {
+  mesh.points = std::move(points);
+  for (ScalarField &field : fields) {
     if (field.centering == Centering::Cell) {
       if (field.values.size() != cellCount)
         throw Error(source, "",

@@ -4,6 +4,7 @@
 #include "core/vec.h"
 
 #include <cstdint>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -65,6 +66,18 @@ bool orientCell(CellType type, uint32_t *v, const std::vector<Vec3f> &points);
 /// Groups the volume cells of `grid` by type, fixes their winding, orders them spatially and reorders the
 /// fields to match. Lower-dimensional cells are dropped and counted; `source` names the file in errors.
 Mesh buildMesh(UnstructuredGrid &&grid, const std::string &source);
+
+/// The cell arrays of an unstructured grid as VTK stores them, viewed in place (e.g. numpy arrays handed over
+/// from Python), so that building a mesh from them copies nothing twice.
+struct CellArraysView {
+  std::span<const int64_t> offsets; ///< cell count + 1 entries, offsets[0] == 0
+  std::span<const int64_t> connectivity;
+  std::span<const uint8_t> types;
+};
+
+/// buildMesh over cells viewed in place; the offsets are checked against the connectivity.
+Mesh buildMesh(std::vector<Vec3f> &&points, CellArraysView cells, std::vector<ScalarField> &&fields,
+               const std::string &source);
 
 /// Sorts each cell type's cells along a Morton curve through their centroids and numbers the points by first
 /// use, so that neighbouring cells and their corners lie close in memory: point location walks and BVH

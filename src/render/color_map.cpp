@@ -519,8 +519,10 @@ const Builtin kBuiltins[] = {
 
 } // namespace
 
-ColorMap readColorMapFile(const std::string &path, const std::string &name) {
-  const Json root = parseJsonFile(path);
+namespace {
+
+/// The presets of a file: an array of them or a single preset object.
+std::vector<const Json *> presetList(const Json &root, const std::string &path) {
   std::vector<const Json *> presets;
   if (root.is_array()) {
     for (const Json &element : root)
@@ -533,7 +535,39 @@ ColorMap readColorMapFile(const std::string &path, const std::string &name) {
   for (size_t i = 0; i < presets.size(); ++i)
     if (!presets[i]->is_object())
       throw Error(path, "preset " + std::to_string(i + 1), "a preset must be a JSON object");
+  return presets;
+}
 
+} // namespace
+
+std::vector<ColorMap> readColorMapPresets(const std::string &path) {
+  const Json root = parseJsonFile(path);
+  const std::vector<const Json *> presets = presetList(root, path);
+  std::vector<ColorMap> maps;
+  for (size_t i = 0; i < presets.size(); ++i)
+    if (presets[i]->contains("RGBPoints"))
+      maps.push_back(parsePreset(*presets[i], i, path));
+  if (maps.empty())
+    throw Error(path, "", "no preset has RGBPoints (presets found: " + listNames(presets) + ")");
+  return maps;
+}
+
+void writeColorMapFile(const std::string &path, const ColorMap &map) {
+  Json preset = {{"Name", map.name},
+                 {"ColorSpace", map.colorSpace},
+                 {"RGBPoints", map.rgbPoints},
+                 {"NanColor", {map.nanColor.x, map.nanColor.y, map.nanColor.z}}};
+  if (!map.opacityPoints.empty())
+    preset["Points"] = map.opacityPoints;
+  std::ofstream out(path);
+  out << Json::array({preset}).dump(2) << '\n';
+  if (!out)
+    throw Error(path, "", "cannot write the preset");
+}
+
+ColorMap readColorMapFile(const std::string &path, const std::string &name) {
+  const Json root = parseJsonFile(path);
+  const std::vector<const Json *> presets = presetList(root, path);
   if (name.empty()) {
     for (size_t i = 0; i < presets.size(); ++i)
       if (presets[i]->contains("RGBPoints"))

@@ -22,6 +22,13 @@ struct ColorMap {
 /// named `name`, or the first with RGBPoints when `name` is empty. Throws uvr::Error naming the file.
 ColorMap readColorMapFile(const std::string &path, const std::string &name = {});
 
+/// Every preset of a ParaView preset file that has RGBPoints, in file order (the viewer's preset list).
+std::vector<ColorMap> readColorMapPresets(const std::string &path);
+
+/// Writes `map` as a ParaView preset file (an array holding one preset) that ParaView's *Import preset* and
+/// readColorMapFile read back. Throws uvr::Error when the file cannot be written.
+void writeColorMapFile(const std::string &path, const ColorMap &map);
+
 /// Names of the built-in presets, the default first.
 std::vector<std::string> builtinColorMapNames();
 

@@ -31,7 +31,7 @@ struct IntegratorSettings {
 struct SceneView {
   MeshView mesh;
   BvhView bvh;
-  OccupancyView occupancy; ///< used by the skipping modes
+  OccupancyView occupancy;                ///< used by the skipping modes
   const uint32_t *tetNeighbors = nullptr; ///< 4 per tet; see buildTetNeighbors
   PartitionsView partitions;
   const float *maxOpacity = nullptr;     ///< per partition, for the current transfer function
@@ -44,11 +44,12 @@ constexpr uint32_t kNoCell = 0xffffffffu;
 
 /// Steps through tets towards `p`, from `cell` across the face it lies furthest beyond, as long as that
 /// is a tet; on success `cell` holds `p` and `value` the field there.
-UVR_HOST_DEVICE inline bool walkTets(const SceneView &scene, Vec3f p, uint32_t &cell, float &value) {
-  constexpr int kMaxSteps = 8; // consecutive samples lie a cell or two apart; beyond that the BVH is faster
+/// Gives up after `maxSteps` tets.
+UVR_HOST_DEVICE inline bool walkTets(const SceneView &scene, Vec3f p, int maxSteps, uint32_t &cell,
+                                     float &value) {
   const MeshView &mesh = scene.mesh;
   uint32_t current = cell;
-  for (int step = 0; step < kMaxSteps && current < mesh.tetCount; ++step) {
+  for (int step = 0; step < maxSteps && current < mesh.tetCount; ++step) {
     const uint32_t *v = mesh.tets + 4 * uint64_t(current);
     float w[4];
     if (!tetBarycentrics(mesh.points[v[0]], mesh.points[v[1]], mesh.points[v[2]], mesh.points[v[3]], p, w))
@@ -68,13 +69,15 @@ UVR_HOST_DEVICE inline bool walkTets(const SceneView &scene, Vec3f p, uint32_t &
 
 /// Finds the cell holding `p`, starting from `cell` (the previous sample's), and returns the field there.
 /// `occupancy` rejects points in empty space at once; an empty view leaves every point to the walk and BVH.
+/// `walkSteps` bounds the walk: about 8 per fixed step, since samples lie a cell or two apart and beyond that
+/// the BVH is faster.
 UVR_HOST_DEVICE inline bool locateSample(const SceneView &scene, const OccupancyView &occupancy, Vec3f p,
-                                         uint32_t &cell, float &value) {
+                                         int walkSteps, uint32_t &cell, float &value) {
   if (!occupancy.mayHoldCell(p))
     return false;
   if (cell != kNoCell) {
     if (scene.tetNeighbors && cell < scene.mesh.tetCount) {
-      if (walkTets(scene, p, cell, value))
+      if (walkTets(scene, p, walkSteps, cell, value))
         return true;
     } else if (sampleCell(scene.mesh, cell, p, value)) {
       return true;
@@ -120,11 +123,12 @@ UVR_HOST_DEVICE inline RayResult integrateRay(const SceneView &scene, const Inte
     while (tEnter + k * s1 < ta) // the division can round down
       k += 1.f;
     const float stride = step / s1;
+    const int walkSteps = 8 * int(ceilf(stride)); // a longer step crosses proportionally more tets
     const float exponent = step / settings.unit;
     for (float t = tEnter + k * s1; t < tb; k += stride, t = tEnter + k * s1) {
       ++result.samples;
       float value;
-      if (!locateSample(scene, occupancy, ray.at(t), cell, value))
+      if (!locateSample(scene, occupancy, ray.at(t), walkSteps, cell, value))
         continue;
       if (first) {
         hint = cell;

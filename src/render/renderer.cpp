@@ -1,8 +1,10 @@
 #include "render/renderer.h"
 
+#include "backend/cuda/cuda_renderer.h"
 #include "core/error.h"
 #include "core/timer.h"
 #include "mesh/tet_neighbors.h"
+#include "render/pixel.h"
 
 namespace uvr {
 
@@ -27,6 +29,22 @@ RenderMode parseMode(const std::string &name) {
   throw Error("unknown mode '" + name + "': expected reference, skip, adaptive or full");
 }
 
+const char *backendName(Backend backend) { return backend == Backend::Cuda ? "cuda" : "cpu"; }
+
+Backend parseBackend(const std::string &name) {
+  if (name == "cpu")
+    return Backend::Cpu;
+  if (name == "cuda") {
+#ifdef UVR_HAVE_CUDA
+    return Backend::Cuda;
+#else
+    throw Error(
+        "this uvr was built without CUDA (no CUDA toolkit was found at build time): use --backend cpu");
+#endif
+  }
+  throw Error("unknown backend '" + name + "': expected cpu or cuda");
+}
+
 Renderer::Renderer(const Mesh &mesh, int fieldIndex, uint32_t leafSize) : mesh_(mesh) {
   if (fieldIndex < 0 || size_t(fieldIndex) >= mesh.fields.size())
     throw Error("the mesh has no scalar field to render");
@@ -43,7 +61,17 @@ void Renderer::setTransferFunction(TransferFunction tf) {
   const Timer timer;
   tf_.emplace(std::move(tf));
   metadata_ = computePartitionMetadata(partitions_, *tf_);
+#ifdef UVR_HAVE_CUDA
+  if (cuda_)
+    cuda_->updateTransferFunction(sceneView(), sceneSizes());
+#endif
   tfUpdateMs_ = timer.milliseconds();
+}
+
+const TransferFunction &Renderer::transferFunction() const {
+  if (!tf_)
+    throw Error("no transfer function set");
+  return *tf_;
 }
 
 SceneView Renderer::sceneView() const {
@@ -60,6 +88,33 @@ SceneView Renderer::sceneView() const {
   return scene;
 }
 
+SceneSizes Renderer::sceneSizes() const {
+  SceneSizes sizes;
+  sizes.points = mesh_.points.size();
+  sizes.values = meshView_.cellCentered ? mesh_.cellCount() : mesh_.points.size();
+  sizes.bvhNodes = bvh_.nodes.size();
+  sizes.bvhCellIds = bvh_.cellIds.size();
+  sizes.partitionNodes = partitions_.nodes.size();
+  sizes.occupancyWords = occupancy_.bits.size();
+  return sizes;
+}
+
+void Renderer::prepare(Backend backend) const {
+  if (backend != Backend::Cuda || cuda_)
+    return;
+#ifdef UVR_HAVE_CUDA
+  if (!tf_)
+    throw Error("no transfer function set");
+  cuda_ = std::make_shared<CudaRenderer>(sceneView(), sceneSizes());
+#else
+  throw Error("this uvr was built without CUDA: use --backend cpu");
+#endif
+}
+
+std::string Renderer::deviceName() const { return cuda_ ? std::string(cuda_->deviceName()) : std::string(); }
+size_t Renderer::deviceMemoryBytes() const { return cuda_ ? cuda_->memoryBytes() : 0; }
+size_t Renderer::deviceSceneBytes() const { return cuda_ ? cuda_->sceneBytes() : 0; }
+
 Frame Renderer::render(const Camera &camera, const RenderSettings &settings) const {
   if (!tf_)
     throw Error("no transfer function set");
@@ -72,7 +127,21 @@ Frame Renderer::render(const Camera &camera, const RenderSettings &settings) con
   frame.image = Image(settings.width, settings.height);
   frame.opacity.assign(size_t(settings.width) * size_t(settings.height), 0.f);
   frame.samplesPerPixel.assign(frame.opacity.size(), 0);
-  renderCpu(sceneView(), makeCameraView(camera, settings.width, settings.height), settings, frame);
+  PixelTarget target;
+  target.rgb = frame.image.rgb.data();
+  target.opacity = frame.opacity.data();
+  target.samples = frame.samplesPerPixel.data();
+  target.width = settings.width;
+  target.background = settings.background;
+  const CameraView view = makeCameraView(camera, settings.width, settings.height);
+  if (settings.backend == Backend::Cuda) {
+    prepare(Backend::Cuda);
+#ifdef UVR_HAVE_CUDA
+    cuda_->render(view, settings.integrator, target, settings.height);
+#endif
+  } else {
+    renderCpu(sceneView(), view, settings, target);
+  }
   for (uint32_t n : frame.samplesPerPixel) {
     frame.samplesTotal += n;
     frame.samplesMax = std::max(frame.samplesMax, n);

@@ -11,13 +11,18 @@
 #include "render/integrator.h"
 #include "render/transfer_function.h"
 
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
 
 namespace uvr {
 
-enum class Backend : uint8_t { Cpu };
+enum class Backend : uint8_t { Cpu, Cuda };
+
+const char *backendName(Backend backend);
+/// Parses cpu|cuda; throws uvr::Error otherwise, and for cuda when this build has no CUDA backend.
+Backend parseBackend(const std::string &name);
 
 const char *modeName(RenderMode mode);
 /// Parses reference|skip|adaptive|full; throws uvr::Error otherwise.
@@ -30,6 +35,10 @@ struct RenderSettings {
   int height = 1024;
   Backend backend = Backend::Cpu;
 };
+
+class CudaRenderer;
+struct PixelTarget;
+struct SceneSizes;
 
 struct Frame {
   Image image;
@@ -48,16 +57,28 @@ public:
   /// Replaces the transfer function and recomputes the partitions' metadata; the mesh is not touched.
   void setTransferFunction(TransferFunction tf);
 
+  /// Sets up `backend` ahead of the first frame (for CUDA: uploads the scene), so that frame times exclude
+  /// it.
+  void prepare(Backend backend) const;
+
   Frame render(const Camera &camera, const RenderSettings &settings) const;
+
+  /// The GPU's name and the device memory this renderer holds; empty and 0 until CUDA has been prepared.
+  std::string deviceName() const;
+  size_t deviceMemoryBytes() const;
+  size_t deviceSceneBytes() const; ///< without the frame buffers
 
   const Partitions &partitions() const { return partitions_; }
   const Bvh &bvh() const { return bvh_; }
   const PartitionMetadata &metadata() const { return metadata_; }
+  /// The current transfer function; throws uvr::Error before the first setTransferFunction.
+  const TransferFunction &transferFunction() const;
   double buildMs() const { return buildMs_; }
   double tfUpdateMs() const { return tfUpdateMs_; }
 
 private:
   SceneView sceneView() const;
+  SceneSizes sceneSizes() const;
 
   const Mesh &mesh_;
   MeshView meshView_;
@@ -69,10 +90,11 @@ private:
   PartitionMetadata metadata_;
   double buildMs_ = 0.0;
   double tfUpdateMs_ = 0.0;
+  mutable std::shared_ptr<CudaRenderer> cuda_; // created on first use of the CUDA backend
 };
 
 /// Draws a frame with all cores: one ray per pixel, composited over `settings.background`.
 void renderCpu(const SceneView &scene, const CameraView &camera, const RenderSettings &settings,
-               Frame &frame);
+               const PixelTarget &target);
 
 } // namespace uvr

@@ -1,0 +1,56 @@
+// The options `uvr render` and `uvr view` share, and how they become the renderer's inputs.
+#pragma once
+
+#include "mesh/mesh.h"
+#include "mesh/mesh_stats.h"
+#include "render/renderer.h"
+
+#include <CLI/CLI.hpp>
+
+#include <string>
+#include <vector>
+
+namespace uvr {
+
+struct RenderOptions {
+  std::string mesh;
+  int timeStep = 0;
+  std::string field;
+  std::string tf;
+  std::string tfName;
+  std::vector<float> range;
+  std::string mode = "full";
+  float s1 = 0.f, s2 = 0.f, p = 0.f, unit = 0.f;
+  uint32_t leafSize = kDefaultLeafSize;
+  std::string size = "1024x1024";
+  std::string eye, at, up;
+  float fovy = 30.f;
+  std::string background = "0,0,0";
+  std::string backend = "cpu";
+};
+
+/// Registers MESH and the options that describe a view (field, transfer function, sampling, camera, size).
+void addRenderOptions(CLI::App *command, RenderOptions &options);
+
+/// A mesh loaded for rendering: lower-dimensional cells reported, the field chosen.
+struct LoadedMesh {
+  Mesh mesh;
+  int fieldIndex = 0;
+  double loadMs = 0.0;
+};
+LoadedMesh loadForRendering(const RenderOptions &options);
+
+/// Image size, background, backend and mode, checked before the mesh is loaded; sampling comes from
+/// chooseSampling.
+RenderSettings parseRenderSettings(const RenderOptions &options);
+
+/// s1, s2, p and unit, with the defaults for the mesh for what is not given.
+IntegratorSettings chooseSampling(const RenderOptions &options, const Mesh &mesh);
+
+/// The --range, or the field's range.
+ValueRange transferRange(const RenderOptions &options, const ScalarField &field);
+
+/// ParaView's reset camera for the mesh, with --eye, --at, --up and --fovy applied.
+Camera chooseCamera(const RenderOptions &options, const Mesh &mesh);
+
+} // namespace uvr

@@ -1,0 +1,66 @@
+#include "commands.h"
+#include "render_options.h"
+
+#include "core/error.h"
+#include "render/render_defaults.h"
+
+#ifdef UVR_HAS_VIEWER
+#include "viewer.h"
+#endif
+
+#include <filesystem>
+#include <memory>
+
+namespace uvr {
+
+namespace {
+
+struct ViewCommandOptions {
+  RenderOptions view;
+  std::string script;
+  std::string screenshot;
+};
+
+void runView(const ViewCommandOptions &o) {
+#ifdef UVR_HAS_VIEWER
+  RenderSettings settings = parseRenderSettings(o.view);
+  const LoadedMesh loaded = loadForRendering(o.view);
+  settings.integrator = chooseSampling(o.view, loaded.mesh);
+
+  ViewerSetup setup;
+  setup.mesh = &loaded.mesh;
+  setup.meshPath = o.view.mesh;
+  setup.fieldIndex = loaded.fieldIndex;
+  setup.leafSize = o.view.leafSize;
+  setup.defaultStep = defaultStepSize(volumeStats(loaded.mesh));
+  setup.camera = chooseCamera(o.view, loaded.mesh);
+  setup.settings = settings;
+  setup.colorMap = chooseColorMap(o.view.tf, o.view.tfName);
+  if (!o.view.tf.empty() && std::filesystem::exists(o.view.tf))
+    setup.presets = readColorMapPresets(o.view.tf);
+  setup.range = transferRange(o.view, loaded.mesh.fields[size_t(loaded.fieldIndex)]);
+  setup.script = o.script;
+  setup.screenshotPrefix = o.screenshot;
+  runViewer(setup);
+#else
+  (void)o;
+  throw Error("this build of uvr has no viewer: it needs GLFW, OpenGL and Dear ImGui at build time "
+              "(Debian: libglfw3-dev libimgui-dev)");
+#endif
+}
+
+} // namespace
+
+void addViewCommand(CLI::App &app) {
+  auto options = std::make_shared<ViewCommandOptions>();
+  ViewCommandOptions &o = *options;
+  o.view.size = "800x800";
+  CLI::App *cmd = app.add_subcommand("view", "Explore a mesh in a window");
+  addRenderOptions(cmd, o.view);
+  cmd->add_option("--script", o.script,
+                  "Replay camera moves and transfer-function edits from a file (README)");
+  cmd->add_option("--screenshot", o.screenshot, "Prefix of the PNGs the script's screenshot commands write");
+  cmd->callback([options] { runView(*options); });
+}
+
+} // namespace uvr

@@ -1,0 +1,34 @@
+// The interactive viewer behind `uvr view`: a GLFW window with the rendered frame, Dear ImGui controls and a
+// colour legend. Nothing here exposes GLFW or OpenGL, so the command compiles without them.
+#pragma once
+
+#include "mesh/mesh.h"
+#include "mesh/mesh_stats.h"
+#include "render/color_map.h"
+#include "render/renderer.h"
+
+#include <string>
+#include <vector>
+
+namespace uvr {
+
+struct ViewerSetup {
+  const Mesh *mesh = nullptr;
+  std::string meshPath;
+  int fieldIndex = 0;
+  uint32_t leafSize = kDefaultLeafSize;
+  float defaultStep = 1.f;       ///< defaultStepSize of the mesh: what s1 = 0 etc. mean
+  Camera camera;                 ///< the starting camera
+  RenderSettings settings;       ///< size of the image region, background, sampling
+  ColorMap colorMap;             ///< the starting preset
+  std::vector<ColorMap> presets; ///< the --tf file's presets, listed after the built-in ones
+  ValueRange range;              ///< the starting range
+  std::string script;            ///< see view_script.h
+  std::string screenshotPrefix;
+};
+
+/// Opens the window and runs until it is closed or the script ends. Throws uvr::Error when no window can be
+/// opened or the script fails.
+void runViewer(const ViewerSetup &setup);
+
+} // namespace uvr

@@ -1,0 +1,287 @@
+"""Tests of the `uvr` Python module against the `uvr` command.
+
+Run by ctest (python/CMakeLists.txt sets PYTHONPATH, UVR_BINARY and UVR_SOURCE_DIR), or by hand:
+PYTHONPATH=build/python /usr/bin/python3 -m pytest python/tests
+"""
+import json
+import os
+import subprocess
+import threading
+
+import numpy as np
+import pytest
+
+import uvr
+
+SOURCE_DIR = os.environ.get("UVR_SOURCE_DIR", os.path.join(os.path.dirname(__file__), "..", ".."))
+UVR_BINARY = os.environ.get("UVR_BINARY", os.path.join(SOURCE_DIR, "build", "uvr"))
+DISK = os.path.join(SOURCE_DIR, "data", "disk_out_ref.vtu")
+PRESETS = os.path.join(SOURCE_DIR, "tests", "data", "presets", "two_presets.json")
+
+VTK_TETRA, VTK_HEXAHEDRON, VTK_WEDGE, VTK_PYRAMID = 10, 12, 13, 14
+
+
+def box_grid(n=4):
+    """A cube of n^3 hexahedra with a point field and a cell field, as PyVista's arrays (flat cells)."""
+    ticks = np.linspace(0.0, 1.0, n + 1)
+    z, y, x = np.meshgrid(ticks, ticks, ticks, indexing="ij")
+    points = np.stack([x.ravel(), y.ravel(), z.ravel()], axis=1)
+
+    def index(i, j, k):
+        return (k * (n + 1) + j) * (n + 1) + i
+
+    cells = []
+    for k in range(n):
+        for j in range(n):
+            for i in range(n):
+                cells.append([8, index(i, j, k), index(i + 1, j, k), index(i + 1, j + 1, k), index(i, j + 1, k),
+                              index(i, j, k + 1), index(i + 1, j, k + 1), index(i + 1, j + 1, k + 1),
+                              index(i, j + 1, k + 1)])
+    cells = np.array(cells, dtype=np.int64)
+    point_field = np.sin(3 * points[:, 0]) + points[:, 1] * points[:, 2]
+    cell_field = np.arange(len(cells), dtype=np.float64)
+    celltypes = np.full(len(cells), VTK_HEXAHEDRON, dtype=np.uint8)
+    return points, cells.ravel(), celltypes, {"wave": point_field}, {"id": cell_field}
+
+
+def split_flat(cells, count):
+    """VTK 9's offsets and connectivity for a flat [n, i0, ...] cells array."""
+    offsets, connectivity, at = [0], [], 0
+    for _ in range(count):
+        n = cells[at]
+        connectivity.extend(cells[at + 1:at + 1 + n])
+        offsets.append(len(connectivity))
+        at += n + 1
+    return np.array(offsets, dtype=np.int64), np.array(connectivity, dtype=np.int64)
+
+
+def cell_corner_sets(points, cells, celltypes):
+    """Each cell as (type, sorted corner coordinates): independent of point and cell order."""
+    result, at = [], 0
+    for t in celltypes:
+        n = cells[at]
+        corners = points[cells[at + 1:at + 1 + n]]
+        result.append((int(t), tuple(sorted(map(tuple, np.round(corners, 6))))))
+        at += n + 1
+    return sorted(result)
+
+
+def run_cli(*args):
+    return subprocess.run([UVR_BINARY, *args], capture_output=True, text=True)
+
+
+def cli_error(*args):
+    result = run_cli(*args)
+    assert result.returncode == 2, result.stderr
+    prefix = "uvr: error: "
+    line = result.stderr.strip().splitlines()[-1]
+    assert line.startswith(prefix)
+    return line[len(prefix):]
+
+
+def test_arrays_round_trip():
+    points, cells, celltypes, point_data, cell_data = box_grid()
+    mesh = uvr.Mesh(points, cells, celltypes, point_data=point_data, cell_data=cell_data)
+    assert mesh.n_points == len(points) and mesh.n_cells == len(celltypes)
+    assert mesh.points.dtype == np.float32 and mesh.points.shape == (len(points), 3)
+    # Cells keep their corners (uvr reorders cells and points spatially, so compare as sets).
+    assert cell_corner_sets(mesh.points, mesh.cells, mesh.celltypes) == \
+        cell_corner_sets(points.astype(np.float32), cells, celltypes)
+    # Each point keeps its value, each cell its value.
+    by_position = {tuple(np.round(p, 6)): v for p, v in zip(points.astype(np.float32), point_data["wave"])}
+    for p, v in zip(mesh.points, mesh.point_data["wave"]):
+        assert v == pytest.approx(by_position[tuple(np.round(p, 6))], abs=1e-6)
+    centroid_id = {}
+    for c in range(len(celltypes)):
+        centroid_id[tuple(np.round(points[cells[9 * c + 1:9 * c + 9]].mean(axis=0), 5))] = cell_data["id"][c]
+    out_cells = mesh.cells.reshape(-1, 9)
+    for c, value in enumerate(mesh.cell_data["id"]):
+        assert value == centroid_id[tuple(np.round(mesh.points[out_cells[c, 1:]].astype(np.float64).mean(axis=0), 5))]
+    assert mesh.bounds == pytest.approx((0, 1, 0, 1, 0, 1))
+
+    # The arrays it gives back build the same mesh, which renders the same image.
+    again = uvr.Mesh(mesh.points, mesh.cells, mesh.celltypes, point_data=mesh.point_data, cell_data=mesh.cell_data)
+    np.testing.assert_array_equal(again.points, mesh.points)
+    np.testing.assert_array_equal(again.cells, mesh.cells)
+    first = uvr.Renderer(mesh, field="wave", leaf_size=8).render(size=(64, 48))
+    second = uvr.Renderer(again, field="wave", leaf_size=8).render(size=(64, 48))
+    np.testing.assert_array_equal(first, second)
+    assert first.std() > 0
+
+
+def test_offsets_and_flat_layouts_agree():
+    points, cells, celltypes, point_data, _ = box_grid(3)
+    offsets, connectivity = split_flat(cells, len(celltypes))
+    flat = uvr.Mesh(points, cells, celltypes, point_data=point_data)
+    split = uvr.Mesh(points, connectivity, celltypes, offsets=offsets, point_data=point_data)
+    np.testing.assert_array_equal(flat.points, split.points)
+    np.testing.assert_array_equal(flat.cells, split.cells)
+    np.testing.assert_array_equal(flat.point_data["wave"], split.point_data["wave"])
+    # int32 indices and float32 points are converted, not refused.
+    narrow = uvr.Mesh(points.astype(np.float32), cells.astype(np.int32), celltypes, point_data=point_data)
+    np.testing.assert_array_equal(flat.cells, narrow.cells)
+
+
+def test_mixed_cells_and_vector_fields():
+    # One tet, one pyramid and one wedge sharing nothing; a 3-component field becomes its magnitude.
+    points = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1],
+                       [2, 0, 0], [3, 0, 0], [3, 1, 0], [2, 1, 0], [2.5, 0.5, 1],
+                       [4, 0, 0], [5, 0, 0], [4, 1, 0], [4, 0, 1], [5, 0, 1], [4, 1, 1]], dtype=np.float64)
+    cells = np.array([4, 0, 1, 2, 3, 5, 4, 5, 6, 7, 8, 6, 9, 10, 11, 12, 13, 14])
+    celltypes = np.array([VTK_TETRA, VTK_PYRAMID, VTK_WEDGE], dtype=np.uint8)
+    vectors = np.tile([3.0, 4.0, 0.0], (len(points), 1))
+    mesh = uvr.Mesh(points, cells, celltypes, point_data={"v": vectors})
+    assert sorted(mesh.celltypes.tolist()) == sorted([VTK_TETRA, VTK_PYRAMID, VTK_WEDGE])
+    np.testing.assert_allclose(mesh.point_data["v"], 5.0)
+
+
+class PyvistaShaped:
+    """What Mesh.from_pyvista reads of a pyvista.UnstructuredGrid, without PyVista."""
+
+    def __init__(self, points, cells, celltypes, point_data, cell_data, vtk9):
+        self.points, self.cells, self.celltypes = points, cells, celltypes
+        self.point_data, self.cell_data = point_data, cell_data
+        if vtk9:
+            self.offsets, self.cell_connectivity = split_flat(cells, len(celltypes))
+
+
+@pytest.mark.parametrize("vtk9", [False, True])
+def test_pyvista_shaped_input(vtk9):
+    points, cells, celltypes, point_data, cell_data = box_grid(3)
+    grid = PyvistaShaped(points, cells, celltypes, point_data, cell_data, vtk9)
+    mesh = uvr.Mesh.from_pyvista(grid)
+    direct = uvr.Mesh(points, cells, celltypes, point_data=point_data, cell_data=cell_data)
+    assert mesh.field_names == ["wave", "id"]
+    np.testing.assert_array_equal(mesh.cells, direct.cells)
+    np.testing.assert_array_equal(mesh.cell_data["id"], direct.cell_data["id"])
+    # A uvr.Mesh has the same attributes, so it converts too.
+    np.testing.assert_array_equal(uvr.Mesh.from_pyvista(mesh).cells, mesh.cells)
+
+
+def test_same_image_as_the_command(tmp_path):
+    png, stats_path = tmp_path / "cli.png", tmp_path / "cli.json"
+    eye, at, up = (30.0, -20.0, 15.0), (0.0, 0.0, 2.0), (0.0, 0.0, 1.0)
+    result = run_cli("render", DISK, "--field", "Pres", "--tf", PRESETS, "--tf-name", "Ramp with Points (test)",
+                     "--range", "0.005", "0.02", "--mode", "adaptive", "--s2", "1.5", "--size", "96x64",
+                     "--eye", ",".join(map(str, eye)), "--at", ",".join(map(str, at)), "--up",
+                     ",".join(map(str, up)), "--fovy", "40", "--background", "0.1,0.2,0.3", "-o", str(png),
+                     "--stats", str(stats_path))
+    assert result.returncode == 0, result.stderr
+    cli_stats = json.loads(stats_path.read_text())
+
+    mesh = uvr.load(DISK)
+    renderer = uvr.Renderer(mesh, field="Pres")
+    tf = uvr.TransferFunction(PRESETS, name="Ramp with Points (test)", range=(0.005, 0.02))
+    image = renderer.render(camera={"eye": eye, "at": at, "up": up, "fovy": 40}, tf=tf, mode="adaptive", s2=1.5,
+                            size=(96, 64), background=(0.1, 0.2, 0.3))
+    assert image.shape == (64, 96, 4) and image.dtype == np.uint8
+    cli_image = uvr.read_png(str(png))
+    assert uvr.compare(image, cli_image)["ssim"] >= 0.999
+    np.testing.assert_array_equal(image[:, :, :3], cli_image)
+
+    stats = renderer.last_stats
+    assert set(stats) == set(cli_stats) - {"load_ms", "frames"}
+    for key in ("mode", "width", "height", "cells", "partitions", "partitions_skipped", "samples_total",
+                "samples_per_pixel_max", "s1", "s2", "p", "unit", "leaf_size", "field", "range", "backend"):
+        assert stats[key] == pytest.approx(cli_stats[key], rel=1e-6), key
+    samples = renderer.last_samples
+    assert samples.shape == (64, 96) and int(samples.sum()) == stats["samples_total"]
+    assert renderer.heatmap().shape == (64, 96, 3)
+
+
+def test_default_view_matches_the_command(tmp_path):
+    png = tmp_path / "cli.png"
+    result = run_cli("render", DISK, "--size", "80x80", "-o", str(png))
+    assert result.returncode == 0, result.stderr
+    renderer = uvr.Renderer(uvr.load(DISK))
+    image = renderer.render(size=(80, 80))
+    np.testing.assert_array_equal(image[:, :, :3], uvr.read_png(str(png)))
+    # Opacity: zero where rays miss the mesh (the corners), and the camera default is the command's.
+    assert image[0, 0, 3] == 0 and image[40, 40, 3] > 0
+    camera = renderer.default_camera()
+    same = renderer.render(camera=camera, size=(80, 80))
+    np.testing.assert_array_equal(image, same)
+    # A transfer function from arrays: the default preset's points give the default image.
+    default = uvr.TransferFunction()
+    from_arrays = uvr.TransferFunction.from_arrays(default.rgb_points, default.opacity_points,
+                                                   color_space="Diverging")
+    np.testing.assert_array_equal(renderer.render(size=(80, 80), tf=from_arrays), image)
+
+
+def test_render_releases_the_gil():
+    renderer = uvr.Renderer(uvr.load(DISK))
+    started, ticks = threading.Event(), []
+    done = threading.Event()
+
+    def work():
+        started.set()
+        renderer.render(size=(256, 256))
+        done.set()
+
+    thread = threading.Thread(target=work)
+    thread.start()
+    started.wait()
+    while not done.is_set():
+        ticks.append(1)  # runs only while the render thread does not hold the GIL
+        done.wait(0.001)
+    thread.join()
+    assert len(ticks) > 3
+
+
+@pytest.mark.parametrize("cli_args, call", [
+    (["render", "missing.vtu", "-o", "x.png"], lambda: uvr.load("missing.vtu")),
+    (["render", DISK, "--field", "Nope", "-o", "x.png"], lambda: uvr.Renderer(uvr.load(DISK), field="Nope")),
+    (["render", DISK, "--tf", "Nope", "-o", "x.png"], lambda: uvr.TransferFunction("Nope")),
+    (["render", DISK, "--tf", "missing.json", "-o", "x.png"], lambda: uvr.TransferFunction("missing.json")),
+    (["render", DISK, "--tf", PRESETS, "--tf-name", "Nope", "-o", "x.png"],
+     lambda: uvr.TransferFunction(PRESETS, name="Nope")),
+    (["render", DISK, "--backend", "metal", "-o", "x.png"],
+     lambda: uvr.Renderer(uvr.load(DISK), backend="metal")),
+    (["render", DISK, "--eye", "0,1,0", "--at", "0,0,0", "--up", "0,1,0", "-o", "x.png"],
+     lambda: uvr.Renderer(uvr.load(DISK)).render(camera={"eye": (0, 1, 0), "at": (0, 0, 0), "up": (0, 1, 0)},
+                                                 size=(8, 8))),
+    (["render", DISK, "--s1", "1", "--s2", "0.5", "-o", "x.png"],
+     lambda: uvr.Renderer(uvr.load(DISK)).render(s1=1, s2=0.5, size=(8, 8))),
+])
+def test_errors_carry_the_command_messages(tmp_path, cli_args, call):
+    os.chdir(tmp_path)
+    message = cli_error(*cli_args)
+    with pytest.raises(uvr.Error) as error:
+        call()
+    assert str(error.value) == message
+
+
+def test_cuda_backend_as_the_command(tmp_path):
+    """Whatever this build and machine have, the module does what the command does: fails with its message
+    (no CUDA at build time, or no GPU) or renders the same image."""
+    png = tmp_path / "cuda.png"
+    result = run_cli("render", DISK, "--backend", "cuda", "--size", "64x64", "-o", str(png))
+    if result.returncode != 0:
+        assert result.returncode == 2, result.stderr
+        message = result.stderr.strip().splitlines()[-1].removeprefix("uvr: error: ")
+        with pytest.raises(uvr.Error) as error:
+            uvr.Renderer(uvr.load(DISK), backend="cuda").render(size=(64, 64))
+        assert str(error.value) == message
+    else:
+        renderer = uvr.Renderer(uvr.load(DISK), backend="cuda")
+        image = renderer.render(size=(64, 64))
+        assert uvr.compare(image, uvr.read_png(str(png)))["ssim"] >= 0.999
+        assert renderer.last_stats["backend"] == "cuda"
+
+
+def test_input_errors():
+    points, cells, celltypes, point_data, _ = box_grid(2)
+    with pytest.raises(uvr.Error, match="point index"):
+        uvr.Mesh(points, np.where(cells == 8, 8, cells + 1000), celltypes)
+    with pytest.raises(uvr.Error, match="ends inside the cell"):
+        uvr.Mesh(points, cells[:-1], celltypes)
+    with pytest.raises(uvr.Error, match="offsets"):
+        uvr.Mesh(points, cells, celltypes, offsets=np.zeros(3, dtype=np.int64))
+    with pytest.raises(uvr.Error, match="do not span"):
+        offsets = np.arange(len(celltypes) + 1, dtype=np.int64) * 100
+        uvr.Mesh(points, cells, celltypes, offsets=offsets)
+    with pytest.raises(uvr.Error, match="has 3 values for 27 points"):
+        uvr.Mesh(points, cells, celltypes, point_data={"short": np.zeros(3)})
+    with pytest.raises(uvr.Error, match="time steps"):
+        uvr.load(DISK, time_step=3)
+    assert uvr.load(DISK, field="Temp").field_names == ["Temp"]

@@ -1,0 +1,575 @@
+// The `uvr` Python module: meshes from files or numpy arrays (PyVista's layout), transfer functions, and the
+// renderer, with the defaults and error messages of `uvr render`.
+#include "core/error.h"
+#include "core/timer.h"
+#include "image/image.h"
+#include "io/mesh_io.h"
+#include "mesh/mesh_stats.h"
+#include "render/render_defaults.h"
+#include "render/renderer.h"
+
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <cmath>
+#include <memory>
+#include <optional>
+
+namespace py = pybind11;
+using namespace uvr;
+
+namespace {
+
+/// A mesh and the name its errors carry: the file's path, as `uvr render` reports it, or "uvr.Mesh".
+struct PyMesh {
+  Mesh mesh;
+  std::string source;
+};
+
+/// A preset and the scalar range it is stretched over; no range = the rendered field's range.
+struct PyTransferFunction {
+  ColorMap map;
+  std::optional<std::pair<float, float>> range;
+};
+
+// Only C-contiguous arrays of exactly this type pass through without a copy; others are converted once.
+template <class T> using InArray = py::array_t<T, py::array::c_style | py::array::forcecast>;
+
+/// A numpy array owning `values` without copying them.
+template <class T> py::array_t<T> ownedArray(std::vector<T> &&values, std::vector<py::ssize_t> shape) {
+  auto *heap = new std::vector<T>(std::move(values));
+  py::capsule owner(heap, [](void *p) { delete static_cast<std::vector<T> *>(p); });
+  return py::array_t<T>(shape, heap->data(), owner);
+}
+
+/// A read-only numpy view of memory that `owner` keeps alive.
+template <class T> py::array_t<T> viewArray(const T *data, std::vector<py::ssize_t> shape, py::handle owner) {
+  py::array_t<T> array(shape, data, owner);
+  array.attr("setflags")(py::arg("write") = false);
+  return array;
+}
+
+Vec3f toVec3(const py::handle &value, const char *what) {
+  const auto v = value.cast<std::vector<float>>();
+  if (v.size() != 3)
+    throw Error(std::string(what) + " expects 3 numbers");
+  return {v[0], v[1], v[2]};
+}
+
+py::tuple fromVec3(Vec3f v) { return py::make_tuple(v.x, v.y, v.z); }
+
+/// One value per tuple: several components become their Euclidean magnitude, as the file readers do.
+ScalarField toField(const std::string &name, Centering centering, const py::handle &object) {
+  const InArray<double> array = py::cast<py::array>(object);
+  if (array.ndim() != 1 && array.ndim() != 2)
+    throw Error("uvr.Mesh", "", "field '" + name + "' must have 1 or 2 dimensions");
+  const size_t tuples = size_t(array.shape(0));
+  const size_t components = array.ndim() == 2 ? size_t(array.shape(1)) : 1;
+  ScalarField field{name, centering, std::vector<float>(tuples)};
+  const double *data = array.data();
+  for (size_t i = 0; i < tuples; ++i) {
+    if (components == 1) {
+      field.values[i] = float(data[i]);
+      continue;
+    }
+    double sum = 0.0;
+    for (size_t c = 0; c < components; ++c)
+      sum += data[i * components + c] * data[i * components + c];
+    field.values[i] = float(std::sqrt(sum));
+  }
+  return field;
+}
+
+void addFields(std::vector<ScalarField> &fields, Centering centering, const py::object &data) {
+  if (data.is_none())
+    return;
+  // PyVista's DataSetAttributes is a mapping with keys() and []; so is a dict.
+  for (const py::handle &key : data.attr("keys")())
+    fields.push_back(toField(py::str(key), centering, data[key]));
+}
+
+std::vector<Vec3f> toPoints(const py::array &object) {
+  if (object.ndim() != 2 || object.shape(1) != 3)
+    throw Error("uvr.Mesh", "", "points must have shape (n, 3)");
+  std::vector<Vec3f> points(size_t(object.shape(0)));
+  if (py::isinstance<py::array_t<float>>(object) && (object.flags() & py::array::c_style)) {
+    std::memcpy(points.data(), object.data(), points.size() * sizeof(Vec3f));
+    return points;
+  }
+  const InArray<double> array = object;
+  const double *p = array.data();
+  for (size_t i = 0; i < points.size(); ++i)
+    points[i] = {float(p[3 * i]), float(p[3 * i + 1]), float(p[3 * i + 2])};
+  return points;
+}
+
+/// Builds a mesh from VTK's arrays: `cells` is the flat [n, i0, i1, ...] layout, or the connectivity when
+/// `offsets` (cell count + 1 entries) are given. Cells, types and offsets are read in place when they are
+/// contiguous int64 / uint8 arrays.
+std::shared_ptr<PyMesh> makeMesh(const py::array &pointsArray, const py::array &cellsArray,
+                                 const py::array &typesArray, const py::object &offsetsObject,
+                                 const py::object &pointData, const py::object &cellData) {
+  const std::string source = "uvr.Mesh";
+  std::vector<Vec3f> points = toPoints(pointsArray);
+  const InArray<int64_t> cells = cellsArray;
+  const InArray<uint8_t> types = typesArray;
+  if (cells.ndim() != 1 || types.ndim() != 1)
+    throw Error(source, "", "cells and celltypes must be one-dimensional");
+  const size_t cellCount = size_t(types.shape(0));
+
+  std::vector<ScalarField> fields;
+  addFields(fields, Centering::Point, pointData);
+  addFields(fields, Centering::Cell, cellData);
+
+  auto result = std::make_shared<PyMesh>();
+  result->source = source;
+  const std::span<const int64_t> cellSpan(cells.data(), size_t(cells.shape(0)));
+  const std::span<const uint8_t> typeSpan(types.data(), cellCount);
+  if (!offsetsObject.is_none()) {
+    const InArray<int64_t> offsets = py::cast<py::array>(offsetsObject);
+    if (offsets.ndim() != 1 || size_t(offsets.shape(0)) != cellCount + 1)
+      throw Error(source, "", "offsets must have one entry more than celltypes (VTK 9's layout)");
+    const CellArraysView view{{offsets.data(), cellCount + 1}, cellSpan, typeSpan};
+    py::gil_scoped_release release;
+    result->mesh = buildMesh(std::move(points), view, std::move(fields), source);
+    return result;
+  }
+  // The flat layout interleaves counts with point indices: split it into offsets and connectivity.
+  std::vector<int64_t> offsets(cellCount + 1, 0), connectivity;
+  connectivity.reserve(cellSpan.size() >= cellCount ? cellSpan.size() - cellCount : 0);
+  size_t at = 0;
+  for (size_t c = 0; c < cellCount; ++c) {
+    if (at >= cellSpan.size() || cellSpan[at] < 0 || uint64_t(cellSpan[at]) > cellSpan.size() - at - 1)
+      throw Error(source, "cell " + std::to_string(c), "cells array ends inside the cell");
+    const size_t n = size_t(cellSpan[at]);
+    connectivity.insert(connectivity.end(), cellSpan.begin() + ptrdiff_t(at + 1),
+                        cellSpan.begin() + ptrdiff_t(at + 1 + n));
+    at += n + 1;
+    offsets[c + 1] = int64_t(connectivity.size());
+  }
+  if (at != cellSpan.size())
+    throw Error(source, "",
+                "cells array holds more entries than its " + std::to_string(cellCount) + " cells");
+  py::gil_scoped_release release;
+  result->mesh = buildMesh(std::move(points), CellArraysView{offsets, connectivity, typeSpan},
+                           std::move(fields), source);
+  return result;
+}
+
+/// PyVista's UnstructuredGrid, duck-typed: VTK 9's offsets + cell_connectivity when present, else cells.
+std::shared_ptr<PyMesh> meshFromPyvista(const py::object &grid) {
+  const bool vtk9 = py::hasattr(grid, "offsets") && py::hasattr(grid, "cell_connectivity");
+  const py::object cells = grid.attr(vtk9 ? "cell_connectivity" : "cells");
+  const py::object offsets = vtk9 ? py::object(grid.attr("offsets")) : py::object(py::none());
+  return makeMesh(grid.attr("points"), cells, grid.attr("celltypes"), offsets, grid.attr("point_data"),
+                  grid.attr("cell_data"));
+}
+
+std::shared_ptr<PyMesh> load(const std::string &path, const std::optional<std::string> &field,
+                             const std::optional<int> &timeStep) {
+  if (timeStep && *timeStep != 0)
+    throw Error(path, "", "time steps other than 0 are not supported by this build's readers");
+  auto result = std::make_shared<PyMesh>();
+  result->source = path;
+  {
+    py::gil_scoped_release release;
+    result->mesh = loadMesh(path);
+  }
+  if (field) {
+    const int index = chooseField(result->mesh, *field, path);
+    ScalarField kept = std::move(result->mesh.fields[size_t(index)]);
+    result->mesh.fields.clear();
+    result->mesh.fields.push_back(std::move(kept));
+  }
+  return result;
+}
+
+/// uvr's cells in VTK's flat layout [n, i0, i1, ...] with their type codes, in the mesh's order.
+std::pair<std::vector<int64_t>, std::vector<uint8_t>> flatCells(const Mesh &mesh) {
+  std::vector<int64_t> cells;
+  std::vector<uint8_t> types;
+  cells.reserve(mesh.tets.size() + mesh.pyramids.size() + mesh.wedges.size() + mesh.hexes.size() +
+                mesh.cellCount());
+  types.reserve(mesh.cellCount());
+  auto add = [&](const std::vector<uint32_t> &ids, int corners, CellType type) {
+    for (size_t i = 0; i < ids.size(); i += size_t(corners)) {
+      cells.push_back(corners);
+      cells.insert(cells.end(), ids.begin() + ptrdiff_t(i), ids.begin() + ptrdiff_t(i) + corners);
+      types.push_back(uint8_t(type));
+    }
+  };
+  add(mesh.tets, 4, CellType::Tetra);
+  add(mesh.pyramids, 5, CellType::Pyramid);
+  add(mesh.wedges, 6, CellType::Wedge);
+  add(mesh.hexes, 8, CellType::Hexahedron);
+  return {std::move(cells), std::move(types)};
+}
+
+py::dict fieldViews(const PyMesh &m, Centering centering, py::handle owner) {
+  py::dict result;
+  for (const ScalarField &f : m.mesh.fields)
+    if (f.centering == centering)
+      result[py::str(f.name)] = viewArray(f.values.data(), {py::ssize_t(f.values.size())}, owner);
+  return result;
+}
+
+PyTransferFunction transferFunctionFromArrays(const py::array &colorsObject,
+                                              const py::object &opacitiesObject,
+                                              const std::optional<std::pair<float, float>> &range,
+                                              const std::string &colorSpace) {
+  const InArray<float> colors = colorsObject;
+  if (colors.ndim() != 2 || colors.shape(1) != 4 || colors.shape(0) < 1)
+    throw Error("uvr.TransferFunction", "", "colors must have shape (n, 4): x, r, g, b per point");
+  PyTransferFunction tf;
+  tf.map.name = "arrays";
+  tf.map.colorSpace = colorSpace;
+  tf.map.rgbPoints.assign(colors.data(), colors.data() + colors.size());
+  if (!opacitiesObject.is_none()) {
+    const InArray<float> opacities = py::cast<py::array>(opacitiesObject);
+    if (opacities.ndim() != 2 || (opacities.shape(1) != 2 && opacities.shape(1) != 4) ||
+        opacities.shape(0) < 1)
+      throw Error(
+          "uvr.TransferFunction", "",
+          "opacities must have shape (n, 2) (x, opacity) or (n, 4) (x, opacity, midpoint, sharpness)");
+    for (py::ssize_t i = 0; i < opacities.shape(0); ++i) {
+      const float *row = opacities.data(i, 0);
+      const bool full = opacities.shape(1) == 4;
+      tf.map.opacityPoints.insert(tf.map.opacityPoints.end(),
+                                  {row[0], row[1], full ? row[2] : 0.5f, full ? row[3] : 0.f});
+    }
+  }
+  tf.range = range;
+  return tf;
+}
+
+bool sameColorMap(const ColorMap &a, const ColorMap &b) {
+  return a.rgbPoints == b.rgbPoints && a.opacityPoints == b.opacityPoints && a.colorSpace == b.colorSpace &&
+         a.nanColor.x == b.nanColor.x && a.nanColor.y == b.nanColor.y && a.nanColor.z == b.nanColor.z;
+}
+
+/// The renderer of one mesh and field, keeping the mesh alive and the last frame's statistics and samples.
+class PyRenderer {
+public:
+  PyRenderer(std::shared_ptr<PyMesh> mesh, const std::optional<std::string> &field,
+             const std::string &backend, uint32_t leafSize)
+      : mesh_(std::move(mesh)), leafSize_(leafSize) {
+    backendKind_ = parseBackend(backend);
+    fieldIndex_ = chooseField(mesh_->mesh, field.value_or(""), mesh_->source);
+    py::gil_scoped_release release;
+    defaultStep_ = defaultStepSize(volumeStats(mesh_->mesh));
+    renderer_ = std::make_unique<Renderer>(mesh_->mesh, fieldIndex_, leafSize_);
+  }
+
+  Camera defaultCamera(float fovy) const { return frameBounds(mesh_->mesh.bounds(), fovy); }
+
+  /// None: the default camera; a dict's keys (eye, at, up, fovy) replace those of the default camera.
+  Camera toCamera(const py::object &object) const {
+    if (object.is_none())
+      return defaultCamera(30.f);
+    if (py::isinstance<Camera>(object))
+      return object.cast<Camera>();
+    const py::dict dict = object.cast<py::dict>();
+    for (const auto &item : dict) {
+      const std::string key = py::str(item.first);
+      if (key != "eye" && key != "at" && key != "up" && key != "fovy")
+        throw Error("unknown camera key '" + key + "': expected eye, at, up, fovy");
+    }
+    Camera camera = defaultCamera(dict.contains("fovy") ? dict["fovy"].cast<float>() : 30.f);
+    if (dict.contains("at"))
+      camera.at = toVec3(dict["at"], "at");
+    if (dict.contains("eye"))
+      camera.eye = toVec3(dict["eye"], "eye");
+    if (dict.contains("up"))
+      camera.up = toVec3(dict["up"], "up");
+    return camera;
+  }
+
+  void setTransferFunction(const PyTransferFunction &tf) {
+    const ScalarField &field = mesh_->mesh.fields[size_t(fieldIndex_)];
+    ValueRange range = valueRange(field);
+    if (tf.range)
+      range = {tf.range->first, tf.range->second};
+    if (appliedMap_ && sameColorMap(*appliedMap_, tf.map) && appliedRange_.min == range.min &&
+        appliedRange_.max == range.max)
+      return;
+    TransferFunction function(tf.map, range.min, range.max);
+    {
+      py::gil_scoped_release release;
+      renderer_->setTransferFunction(std::move(function));
+    }
+    appliedMap_ = tf.map;
+    appliedRange_ = range;
+  }
+
+  py::array_t<uint8_t> render(const py::object &cameraObject, const std::optional<PyTransferFunction> &tf,
+                              const std::string &mode, std::optional<float> s1, std::optional<float> s2,
+                              std::optional<float> p, std::optional<float> unit, std::pair<int, int> size,
+                              const py::object &background) {
+    const auto [width, height] = size;
+    if (width <= 0 || height <= 0 || width > 16384 || height > 16384)
+      throw Error("size expects (width, height) with each side from 1 to 16384");
+    RenderSettings settings;
+    settings.backend = backendKind_;
+    settings.width = width;
+    settings.height = height;
+    settings.background = toVec3(background, "background");
+    settings.integrator = samplingSettings(parseMode(mode), defaultStep_, s1.value_or(0.f), s2.value_or(0.f),
+                                           p.value_or(0.f), unit.value_or(0.f));
+    const Camera camera = toCamera(cameraObject);
+    checkCamera(camera);
+    setTransferFunction(tf ? *tf : PyTransferFunction{chooseColorMap(""), std::nullopt});
+
+    Frame frame;
+    double renderMs = 0.0;
+    {
+      py::gil_scoped_release release;
+      renderer_->prepare(backendKind_); // uploads the scene for CUDA once, outside the frame time
+      const Timer timer;
+      frame = renderer_->render(camera, settings);
+      renderMs = timer.milliseconds();
+    }
+    lastStats_ = frameStats(mesh_->mesh, *renderer_, settings, frame, renderMs, leafSize_, fieldIndex_);
+    width_ = width;
+    height_ = height;
+
+    std::vector<uint8_t> rgba(size_t(width) * size_t(height) * 4);
+    for (size_t i = 0; i < frame.opacity.size(); ++i) {
+      for (int c = 0; c < 3; ++c)
+        rgba[4 * i + size_t(c)] = frame.image.rgb[3 * i + size_t(c)];
+      rgba[4 * i + 3] = uint8_t(std::lround(std::clamp(frame.opacity[i], 0.f, 1.f) * 255.f));
+    }
+    lastSamples_ = std::move(frame.samplesPerPixel);
+    return ownedArray(std::move(rgba), {height, width, 4});
+  }
+
+  py::object lastStats() const {
+    if (lastStats_.is_null())
+      return py::none();
+    return py::module_::import("json").attr("loads")(lastStats_.dump());
+  }
+
+  py::object lastSamples() const {
+    if (lastSamples_.empty())
+      return py::none();
+    return py::array_t<uint32_t>({height_, width_}, lastSamples_.data());
+  }
+
+  py::object heatmap() const {
+    if (lastSamples_.empty())
+      return py::none();
+    Image image = heatmapImage(lastSamples_, width_, height_);
+    return ownedArray(std::move(image.rgb), {height_, width_, 3});
+  }
+
+  const std::string &fieldName() const { return mesh_->mesh.fields[size_t(fieldIndex_)].name; }
+  std::shared_ptr<PyMesh> mesh() const { return mesh_; }
+
+private:
+  std::shared_ptr<PyMesh> mesh_;
+  Backend backendKind_ = Backend::Cpu;
+  uint32_t leafSize_;
+  int fieldIndex_ = 0;
+  float defaultStep_ = 1.f;
+  std::unique_ptr<Renderer> renderer_;
+  std::optional<ColorMap> appliedMap_;
+  ValueRange appliedRange_;
+  nlohmann::json lastStats_;
+  std::vector<uint32_t> lastSamples_;
+  int width_ = 0, height_ = 0;
+};
+
+Image toImage(const py::array &object) {
+  const InArray<uint8_t> array = object;
+  if (array.ndim() != 3 || (array.shape(2) != 3 && array.shape(2) != 4))
+    throw Error("an image must be a (height, width, 3 or 4) uint8 array");
+  Image image(int(array.shape(1)), int(array.shape(0)));
+  const size_t channels = size_t(array.shape(2));
+  const uint8_t *data = array.data();
+  for (size_t i = 0; i < size_t(image.width) * size_t(image.height); ++i)
+    for (size_t c = 0; c < 3; ++c)
+      image.rgb[3 * i + c] = data[channels * i + c];
+  return image;
+}
+
+} // namespace
+
+PYBIND11_MODULE(uvr, m) {
+  m.doc() = "uvr: volume rendering of unstructured meshes with space skipping and adaptive sampling";
+  // Every uvr::Error surfaces as uvr.Error (a RuntimeError) with the message `uvr render` prints.
+  py::register_exception<Error>(m, "Error", PyExc_RuntimeError);
+
+  py::class_<Camera>(m, "Camera", "A pinhole camera as ParaView describes one; fovy in degrees, vertical.")
+      .def(py::init([](const py::object &eye, const py::object &at, const py::object &up, float fovy) {
+             Camera c;
+             c.eye = toVec3(eye, "eye");
+             c.at = toVec3(at, "at");
+             c.up = toVec3(up, "up");
+             c.fovy = fovy;
+             return c;
+           }),
+           py::arg("eye"), py::arg("at"), py::arg("up") = py::make_tuple(0.f, 1.f, 0.f),
+           py::arg("fovy") = 30.f)
+      .def_property(
+          "eye", [](const Camera &c) { return fromVec3(c.eye); },
+          [](Camera &c, const py::object &v) { c.eye = toVec3(v, "eye"); })
+      .def_property(
+          "at", [](const Camera &c) { return fromVec3(c.at); },
+          [](Camera &c, const py::object &v) { c.at = toVec3(v, "at"); })
+      .def_property(
+          "up", [](const Camera &c) { return fromVec3(c.up); },
+          [](Camera &c, const py::object &v) { c.up = toVec3(v, "up"); })
+      .def_readwrite("fovy", &Camera::fovy)
+      .def("__repr__", [](const Camera &c) {
+        return py::str("uvr.Camera(eye={}, at={}, up={}, fovy={})")
+            .format(fromVec3(c.eye), fromVec3(c.at), fromVec3(c.up), c.fovy);
+      });
+
+  py::class_<PyMesh, std::shared_ptr<PyMesh>>(
+      m, "Mesh", "A volume mesh: tets, pyramids, wedges and hexahedra with fields")
+      .def(py::init(&makeMesh), py::arg("points"), py::arg("cells"), py::arg("celltypes"),
+           py::arg("offsets") = py::none(), py::arg("point_data") = py::none(),
+           py::arg("cell_data") = py::none(),
+           "points (n, 3); cells: VTK's flat [n, i0, i1, ...] layout, or the connectivity when offsets "
+           "(cells + 1 "
+           "entries) are given; celltypes: VTK type codes; point_data / cell_data: name -> (n,) or (n, k) "
+           "arrays")
+      .def_static("from_pyvista", &meshFromPyvista, py::arg("grid"),
+                  "From any object with PyVista's UnstructuredGrid attributes (points, cells, celltypes, "
+                  "point_data, cell_data; offsets + cell_connectivity when present)")
+      .def_property_readonly(
+          "points",
+          [](py::object self) {
+            const PyMesh &m = self.cast<const PyMesh &>();
+            return viewArray(&m.mesh.points.data()->x, {py::ssize_t(m.mesh.points.size()), 3}, self);
+          })
+      .def_property_readonly("cells",
+                             [](const PyMesh &m) {
+                               auto cells = flatCells(m.mesh).first;
+                               const py::ssize_t n = py::ssize_t(cells.size());
+                               return ownedArray(std::move(cells), {n});
+                             })
+      .def_property_readonly("celltypes",
+                             [](const PyMesh &m) {
+                               auto types = flatCells(m.mesh).second;
+                               const py::ssize_t n = py::ssize_t(types.size());
+                               return ownedArray(std::move(types), {n});
+                             })
+      .def_property_readonly(
+          "point_data",
+          [](py::object self) { return fieldViews(self.cast<const PyMesh &>(), Centering::Point, self); })
+      .def_property_readonly(
+          "cell_data",
+          [](py::object self) { return fieldViews(self.cast<const PyMesh &>(), Centering::Cell, self); })
+      .def_property_readonly("n_points", [](const PyMesh &m) { return m.mesh.points.size(); })
+      .def_property_readonly("n_cells", [](const PyMesh &m) { return m.mesh.cellCount(); })
+      .def_property_readonly("field_names",
+                             [](const PyMesh &m) {
+                               std::vector<std::string> names;
+                               for (const ScalarField &f : m.mesh.fields)
+                                 names.push_back(f.name);
+                               return names;
+                             })
+      .def_property_readonly("bounds",
+                             [](const PyMesh &m) {
+                               const Box3f b = m.mesh.bounds();
+                               return py::make_tuple(b.lower.x, b.upper.x, b.lower.y, b.upper.y, b.lower.z,
+                                                     b.upper.z);
+                             })
+      .def_property_readonly("skipped_cells", [](const PyMesh &m) { return m.mesh.skippedCells; })
+      .def_property_readonly("inverted_cells", [](const PyMesh &m) { return m.mesh.invertedCells; })
+      .def("__repr__", [](const PyMesh &m) {
+        return py::str("uvr.Mesh({} points, {} cells, fields {})")
+            .format(m.mesh.points.size(), m.mesh.cellCount(), py::cast(m.mesh.fields.size()));
+      });
+
+  m.def("load", &load, py::arg("path"), py::arg("field") = py::none(), py::arg("time_step") = py::none(),
+        "Reads a mesh file (.vtu, .vtk) as `uvr render` does; with `field`, keeps only that field");
+
+  py::class_<PyTransferFunction>(m, "TransferFunction",
+                                 "A colour and opacity preset stretched over a scalar range (ParaView's way)")
+      .def(py::init([](const std::string &preset, const std::optional<std::string> &name,
+                       const std::optional<std::pair<float, float>> &range) {
+             return PyTransferFunction{chooseColorMap(preset, name.value_or("")), range};
+           }),
+           py::arg("preset") = builtinColorMapNames().front(), py::arg("name") = py::none(),
+           py::arg("range") = py::none(),
+           "preset: a ParaView preset JSON file (taking preset `name`, or the first) or a built-in name; "
+           "range: (lo, hi), default the rendered field's range")
+      .def_static(
+          "from_arrays", &transferFunctionFromArrays, py::arg("colors"), py::arg("opacities") = py::none(),
+          py::arg("range") = py::none(), py::arg("color_space") = "RGB",
+          "colors (n, 4): x, r, g, b; opacities (m, 2): x, opacity or (m, 4) with midpoint, sharpness; "
+          "the points' x span is stretched over range")
+      .def_property_readonly("name", [](const PyTransferFunction &tf) { return tf.map.name; })
+      .def_property_readonly("range", [](const PyTransferFunction &tf) { return tf.range; })
+      .def_property_readonly("rgb_points",
+                             [](const PyTransferFunction &tf) {
+                               std::vector<float> v = tf.map.rgbPoints;
+                               const py::ssize_t n = py::ssize_t(v.size() / 4);
+                               return ownedArray(std::move(v), {n, 4});
+                             })
+      .def_property_readonly("opacity_points",
+                             [](const PyTransferFunction &tf) {
+                               std::vector<float> v = tf.map.opacityPoints;
+                               const py::ssize_t n = py::ssize_t(v.size() / 4);
+                               return ownedArray(std::move(v), {n, 4});
+                             })
+      .def(
+          "table",
+          [](const PyTransferFunction &tf, int count) {
+            if (count < 2)
+              throw Error("table needs at least 2 entries");
+            std::vector<Vec4f> table = sampleColorMap(tf.map, count);
+            std::vector<float> flat(size_t(count) * 4);
+            std::memcpy(flat.data(), table.data(), flat.size() * sizeof(float));
+            return ownedArray(std::move(flat), {count, 4});
+          },
+          py::arg("count") = 256, "r, g, b, opacity at `count` points evenly spaced over the preset");
+
+  m.def("builtin_presets", &builtinColorMapNames, "Names of the built-in presets, the default first");
+
+  py::class_<PyRenderer>(m, "Renderer",
+                         "Acceleration structures for one mesh and field, and frames drawn from them")
+      .def(py::init<std::shared_ptr<PyMesh>, const std::optional<std::string> &, const std::string &,
+                    uint32_t>(),
+           py::arg("mesh"), py::arg("field") = py::none(), py::arg("backend") = "cpu",
+           py::arg("leaf_size") = kDefaultLeafSize)
+      .def("render", &PyRenderer::render, py::arg("camera") = py::none(), py::arg("tf") = py::none(),
+           py::arg("mode") = "full", py::arg("s1") = py::none(), py::arg("s2") = py::none(),
+           py::arg("p") = py::none(), py::arg("unit") = py::none(),
+           py::arg("size") = std::pair<int, int>(1024, 1024),
+           py::arg("background") = py::make_tuple(0.f, 0.f, 0.f),
+           "Returns an (h, w, 4) uint8 array: RGB composited over the background, and accumulated opacity x "
+           "255")
+      .def("default_camera", &PyRenderer::defaultCamera, py::arg("fovy") = 30.f,
+           "ParaView's reset camera, as `uvr render` uses by default")
+      .def_property_readonly("last_stats", &PyRenderer::lastStats)
+      .def_property_readonly("last_samples", &PyRenderer::lastSamples, "(h, w) uint32 samples per pixel")
+      .def("heatmap", &PyRenderer::heatmap,
+           "The last frame's samples per pixel as `uvr render --heatmap` draws them")
+      .def_property_readonly("field", &PyRenderer::fieldName)
+      .def_property_readonly("mesh", &PyRenderer::mesh);
+
+  m.def(
+      "read_png",
+      [](const std::string &path) {
+        Image image = readPng(path);
+        const int w = image.width, h = image.height;
+        return ownedArray(std::move(image.rgb), {h, w, 3});
+      },
+      py::arg("path"));
+  m.def(
+      "write_png", [](const std::string &path, const py::array &image) { writePng(path, toImage(image)); },
+      py::arg("path"), py::arg("image"), "Writes the RGB channels of an (h, w, 3 or 4) uint8 array");
+  m.def(
+      "compare",
+      [](const py::array &a, const py::array &b) {
+        const Image ia = toImage(a), ib = toImage(b);
+        py::dict result;
+        result["ssim"] = ssim(ia, ib);
+        result["psnr"] = psnr(ia, ib);
+        return result;
+      },
+      py::arg("a"), py::arg("b"), "SSIM and PSNR of the RGB channels, as `uvr compare`");
+}

@@ -1,0 +1,47 @@
+// The CUDA backend's host side: device copies of everything a ray reads, uploaded once per mesh, the transfer
+// function and partition metadata re-uploaded on each change. A plain C++ header: no CUDA types leak out.
+#pragma once
+
+#include "render/camera.h"
+#include "render/integrator.h"
+#include "render/pixel.h"
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <string>
+
+namespace uvr {
+
+/// Element counts of the arrays a SceneView points to, so that they can be copied.
+struct SceneSizes {
+  uint64_t points = 0, values = 0, bvhNodes = 0, bvhCellIds = 0, partitionNodes = 0, occupancyWords = 0;
+};
+
+class CudaRenderer {
+public:
+  /// Uploads the scene to the current GPU; throws uvr::Error when there is none or memory runs out.
+  CudaRenderer(const SceneView &scene, const SceneSizes &sizes);
+  ~CudaRenderer();
+  CudaRenderer(const CudaRenderer &) = delete;
+  CudaRenderer &operator=(const CudaRenderer &) = delete;
+
+  /// Re-uploads the transfer-function table and the partition metadata of `scene`.
+  void updateTransferFunction(const SceneView &scene, const SceneSizes &sizes);
+
+  /// Renders into `target`'s host buffers (width x height pixels).
+  void render(const CameraView &camera, const IntegratorSettings &settings, const PixelTarget &target,
+              int height);
+
+  /// Device memory held: the scene alone (mesh, field, acceleration, partitions, transfer function), and all
+  /// of it including the frame buffers.
+  size_t sceneBytes() const;
+  size_t memoryBytes() const;
+  const std::string &deviceName() const;
+
+private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+} // namespace uvr

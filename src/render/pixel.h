@@ -1,0 +1,32 @@
+// Where a ray's result goes: the frame's buffers as plain pointers, written the same way by every backend.
+#pragma once
+
+#include "core/host_device.h"
+#include "render/integrator.h"
+
+#include <cstdint>
+
+namespace uvr {
+
+struct PixelTarget {
+  uint8_t *rgb = nullptr;      ///< 3 bytes per pixel, row-major, top row first
+  float *opacity = nullptr;    ///< accumulated opacity per pixel
+  uint32_t *samples = nullptr; ///< samples taken per pixel
+  int width = 0;
+  Vec3f background;
+
+  UVR_HOST_DEVICE static uint8_t toByte(float v) { return uint8_t(clampf(v, 0.f, 1.f) * 255.f + 0.5f); }
+
+  /// Composites `result` over the background and stores it at (x, y).
+  UVR_HOST_DEVICE void store(int x, int y, const RayResult &result) const {
+    const uint64_t index = uint64_t(y) * uint64_t(width) + uint64_t(x);
+    const float transmittance = 1.f - result.color.w;
+    rgb[3 * index + 0] = toByte(result.color.x + transmittance * background.x);
+    rgb[3 * index + 1] = toByte(result.color.y + transmittance * background.y);
+    rgb[3 * index + 2] = toByte(result.color.z + transmittance * background.z);
+    opacity[index] = result.color.w;
+    samples[index] = result.samples;
+  }
+};
+
+} // namespace uvr
