@@ -606,3 +606,18 @@ TEST_F(Formats, NumberedFileTimeSteps) {
   EXPECT_NE(errorOf([&] { loadMesh(path("data_0.vtu"), {1}); }).find("time step 1 asked, the file has 1"),
             std::string::npos);
 }
+
+TEST_F(Formats, GmshFieldWithFewerTimeSteps) {
+  auto nodeData = [](const char *name, int step) {
+    return std::string("$NodeData\n1\n\"") + name + "\"\n0\n3\n" + std::to_string(step) +
+           "\n1\n4\n1 0\n2 0\n3 0\n4 " + std::to_string(step) + "\n$EndNodeData\n";
+  };
+  writeBytes(path("steps.msh"), "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n4\n1 0 0 0\n2 1 0 0\n3 0 1 0\n"
+                                "4 0 0 1\n$EndNodes\n$Elements\n1\n1 4 0 1 2 3 4\n$EndElements\n" +
+                                    nodeData("a", 0) + nodeData("a", 1) + nodeData("a", 2) +
+                                    nodeData("b", 0) + nodeData("b", 1));
+  EXPECT_EQ(timeStepCount(path("steps.msh")), 3);
+  EXPECT_EQ(loadMesh(path("steps.msh"), {1}).fields[1].values.size(), 4u);
+  const std::string error = errorOf([&] { loadMesh(path("steps.msh"), {2}); });
+  EXPECT_NE(error.find("field 'b' has 2 time steps, step 2 asked"), std::string::npos) << error;
+}

@@ -8,7 +8,8 @@ namespace uvr {
 void addRenderCommand(CLI::App &app);
 void addInfoCommand(CLI::App &app);
 void addCompareCommand(CLI::App &app);
-void addViewCommand(CLI::App &app);
 void addConvertCommand(CLI::App &app);
+void addViewCommand(CLI::App &app);
+void addGenCommand(CLI::App &app);
 
 } // namespace uvr

@@ -56,16 +56,17 @@ void runConvert(const ConvertOptions &o) {
 void addConvertCommand(CLI::App &app) {
   auto options = std::make_shared<ConvertOptions>();
   CLI::App *cmd = app.add_subcommand("convert", "Convert a mesh to another format (.vtu, .umesh)");
-  cmd->add_option(
-         "IN", options->input,
-         "Mesh to read (.vtu, .vtk, .msh, .umesh; a .pvd series or numbered files such as data_%d.vtu)")
+  cmd->add_option("IN", options->input,
+                  "Mesh to read (.vtu, .vtk, .msh, .e, .ex2, .exo, .g, .umesh; a .pvd series or numbered "
+                  "files such as data_%d.vtu)")
       ->required();
   cmd->add_option("OUT", options->output, "Mesh file to write (.vtu, .umesh)")->required();
   cmd->add_option("--field", options->fields, "Field to keep (repeat the option for several; default: all)")
       ->expected(1)
       ->allow_extra_args(false)
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
-  cmd->add_option("--time-step", options->timeStep, "Time step of a series or of a Gmsh file's data, from 0")
+  cmd->add_option("--time-step", options->timeStep,
+                  "Time step of a series, an Exodus file or a Gmsh file's data, from 0")
       ->capture_default_str();
   cmd->add_flag("--zlib", options->zlib, "Compress the .vtu arrays with zlib");
   cmd->callback([options] { runConvert(*options); });

@@ -7,7 +7,9 @@
 
 #include <nlohmann/json.hpp>
 
+#include <cmath>
 #include <cstdio>
+#include <ctime>
 #include <memory>
 
 namespace uvr {
@@ -20,10 +22,19 @@ struct InfoOptions {
   int timeStep = 0;
 };
 
+/// CPU time of all the process's threads: on a busy machine, the work a load takes apart from waiting.
+double processCpuMs() {
+  timespec t{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+  return double(t.tv_sec) * 1e3 + double(t.tv_nsec) * 1e-6;
+}
+
 void runInfo(const InfoOptions &o) {
   const Timer loadTimer;
+  const double cpuBefore = processCpuMs();
   const Mesh mesh = loadMesh(o.mesh, {o.timeStep});
   const double loadMs = loadTimer.milliseconds();
+  const double loadCpuMs = processCpuMs() - cpuBefore;
   const int timeSteps = timeStepCount(o.mesh);
   const VolumeStats volumes = volumeStats(mesh);
   const Box3f bounds = mesh.bounds();
@@ -54,10 +65,16 @@ void runInfo(const InfoOptions &o) {
       {"volume_min", volumes.min},
       {"volume_median", volumes.median},
       {"volume_max", volumes.max},
+      {"volume_p1", volumes.p1},
+      {"volume_p99", volumes.p99},
+      {"volume_ratio", volumes.min > 0 ? nlohmann::json(volumes.max / volumes.min) : nlohmann::json(nullptr)},
+      {"volume_ratio_p99_p1",
+       volumes.p1 > 0 ? nlohmann::json(volumes.p99 / volumes.p1) : nlohmann::json(nullptr)},
       {"partitions", partitions},
       {"time_steps", timeSteps},
       {"time_step", o.timeStep},
       {"load_ms", loadMs},
+      {"load_cpu_ms", loadCpuMs},
   };
   if (o.json) {
     std::printf("%s\n", info.dump(2).c_str());
@@ -81,9 +98,12 @@ void runInfo(const InfoOptions &o) {
               bounds.lower.y, bounds.upper.y, bounds.lower.z, bounds.upper.z);
   std::printf("  inverted cells  %llu\n", static_cast<unsigned long long>(mesh.invertedCells));
   std::printf("  cell volume     min %g, median %g, max %g\n", volumes.min, volumes.median, volumes.max);
+  std::printf("  volume spread   max/min %g, p99/p1 %g (p1 %g, p99 %g)\n",
+              volumes.min > 0 ? volumes.max / volumes.min : INFINITY,
+              volumes.p1 > 0 ? volumes.p99 / volumes.p1 : INFINITY, volumes.p1, volumes.p99);
   std::printf("  partitions      %u (leaf size %u)\n", partitions, kDefaultLeafSize);
   std::printf("  time steps      %d (showing %d)\n", timeSteps, o.timeStep);
-  std::printf("  load            %.1f ms\n", loadMs);
+  std::printf("  load            %.1f ms (cpu %.1f ms)\n", loadMs, loadCpuMs);
 }
 
 } // namespace
@@ -92,10 +112,9 @@ void addInfoCommand(CLI::App &app) {
   auto options = std::make_shared<InfoOptions>();
   CLI::App *cmd =
       app.add_subcommand("info", "Describe a mesh: cells, fields, bounds, cell volumes, partitions");
-  cmd->add_option(
-         "MESH", options->mesh,
-         "Mesh file (.vtu, .vtk, .msh, .umesh, .e, .ex2, .exo, .g; a .pvd series or numbered files such "
-         "as data_%d.vtu)")
+  cmd->add_option("MESH", options->mesh,
+                  "Mesh file (.vtu, .vtk, .msh, .e, .ex2, .exo, .g, .umesh; a .pvd series or numbered files "
+                  "such as data_%d.vtu)")
       ->required();
   cmd->add_flag("--json", options->json, "Print JSON");
   cmd->add_option("--time-step", options->timeStep,

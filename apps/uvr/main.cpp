@@ -11,8 +11,9 @@ int main(int argc, char **argv) {
   uvr::addRenderCommand(app);
   uvr::addInfoCommand(app);
   uvr::addCompareCommand(app);
-  uvr::addViewCommand(app);
   uvr::addConvertCommand(app);
+  uvr::addViewCommand(app);
+  uvr::addGenCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError &e) {

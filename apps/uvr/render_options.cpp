@@ -32,7 +32,10 @@ void parseSize(const std::string &text, int &width, int &height) {
 } // namespace
 
 void addRenderOptions(CLI::App *cmd, RenderOptions &o) {
-  cmd->add_option("MESH", o.mesh, "Mesh file (.vtu, .vtk, .e, .ex2, .exo, .g)")->required();
+  cmd->add_option("MESH", o.mesh,
+                  "Mesh file (.vtu, .vtk, .msh, .e, .ex2, .exo, .g, .umesh; a .pvd series or numbered files "
+                  "such as data_%d.vtu)")
+      ->required();
   cmd->add_option("--time-step", o.timeStep, "Time step of a file that has several, from 0")
       ->capture_default_str();
   cmd->add_option("--field", o.field, "Scalar field to render (default: the first)");

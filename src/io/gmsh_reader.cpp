@@ -603,15 +603,17 @@ private:
         order.push_back(key);
       groups[key].push_back(&block);
     }
-    int steps = 1;
-    for (auto &[key, blocks] : groups) {
+    auto stepIndices = [](const std::vector<const DataBlock *> &blocks) {
       std::vector<int64_t> indices;
       for (const DataBlock *block : blocks)
         indices.push_back(block->timeStep);
       std::sort(indices.begin(), indices.end());
       indices.erase(std::unique(indices.begin(), indices.end()), indices.end());
-      steps = std::max(steps, int(indices.size()));
-    }
+      return indices;
+    };
+    int steps = 1;
+    for (const auto &group : groups)
+      steps = std::max(steps, int(stepIndices(group.second).size()));
     if (timeStepCount)
       *timeStepCount = steps;
     if (options_.timeStep < 0 || options_.timeStep >= steps)
@@ -621,15 +623,12 @@ private:
 
     for (const auto &key : order) {
       const std::vector<const DataBlock *> &blocks = groups[key];
-      std::vector<int64_t> indices;
-      for (const DataBlock *block : blocks)
-        indices.push_back(block->timeStep);
-      std::sort(indices.begin(), indices.end());
-      indices.erase(std::unique(indices.begin(), indices.end()), indices.end());
-      const int64_t step = indices.size() == 1 ? indices[0] : indices[size_t(options_.timeStep)];
+      const std::vector<int64_t> indices = stepIndices(blocks);
       if (options_.timeStep >= int(indices.size()) && indices.size() > 1)
         throw Error(path_, "",
-                    "field '" + key.first + "' has no time step " + std::to_string(options_.timeStep));
+                    "field '" + key.first + "' has " + std::to_string(indices.size()) + " time steps, step " +
+                        std::to_string(options_.timeStep) + " asked");
+      const int64_t step = indices.size() == 1 ? indices[0] : indices[size_t(options_.timeStep)];
 
       const bool point = key.second == Centering::Point;
       const TagMap &map = point ? nodes_ : elements_;

@@ -26,6 +26,10 @@ std::string lowerCaseExtension(const std::string &path) {
   return extension;
 }
 
+bool isExodus(const std::string &extension) {
+  return extension == ".e" || extension == ".ex2" || extension == ".exo" || extension == ".g";
+}
+
 /// The files of each time step of a series, in time order; empty when `path` is a single file.
 using Series = std::vector<std::vector<std::string>>;
 
@@ -147,10 +151,6 @@ Series seriesOf(const std::string &path) {
   return {};
 }
 
-bool isExodus(const std::string &extension) {
-  return extension == ".e" || extension == ".ex2" || extension == ".exo" || extension == ".g";
-}
-
 UnstructuredGrid readGrid(const std::string &path, const LoadOptions &options, int *steps = nullptr) {
   const std::string extension = lowerCaseExtension(path);
   if (extension == ".vtu")
@@ -163,7 +163,7 @@ UnstructuredGrid readGrid(const std::string &path, const LoadOptions &options, i
     return readExodus(path, options.timeStep);
   throw Error(path, "",
               "unknown mesh format '" + extension +
-                  "': expected .vtu, .vtk, .msh, .umesh, .pvd, .e, .ex2, .exo or .g");
+                  "': expected .vtu, .vtk, .msh, .e, .ex2, .exo, .g, .umesh or .pvd");
 }
 
 /// Concatenates the parts of one time step: point indices of later parts are shifted past earlier ones.
@@ -211,7 +211,8 @@ Mesh loadMesh(const std::string &path, const LoadOptions &options) {
       throw Error(path, "", "time step " + std::to_string(options.timeStep) + " asked, the file has 1");
     return readUmesh(path);
   }
-  if (options.timeStep != 0 && lowerCaseExtension(path) != ".msh" && !isExodus(lowerCaseExtension(path)))
+  const std::string extension = lowerCaseExtension(path);
+  if (options.timeStep != 0 && extension != ".msh" && !isExodus(extension))
     throw Error(path, "", "time step " + std::to_string(options.timeStep) + " asked, the file has 1");
   return buildMesh(readGrid(path, options), path);
 }

@@ -7,9 +7,10 @@
 
 namespace uvr {
 
-/// What to read of a file that holds more than one mesh or field state.
+/// What a load may choose beyond the file: formats with time steps (Exodus, Gmsh data, series) read step
+/// `timeStep` (0-based).
 struct LoadOptions {
-  int timeStep = 0; ///< 0-based, in the order of the file's (or the series') time values
+  int timeStep = 0;
 };
 
 /// VTK XML unstructured grid: ascii, inline base64, appended raw or base64; zlib; UInt32/UInt64 headers;
@@ -51,7 +52,8 @@ void writeVtu(const std::string &path, const Mesh &mesh, bool compress = false);
 /// data_%04d.vtu or data_*.vtu (sorted by their numbers). `options.timeStep` picks the step.
 Mesh loadMesh(const std::string &path, const LoadOptions &options = {});
 
-/// The number of time steps `path` holds (1 for a file without time).
+/// The number of time steps `path` holds: of a series or a Gmsh file's data; 1 otherwise (Exodus too, for
+/// now).
 int timeStepCount(const std::string &path);
 
 /// Writes `mesh` in the format its extension names (.umesh, .vtu).

@@ -6,11 +6,15 @@
 #include "io/file_buffer.h"
 #include "io/mesh_io.h"
 
+#ifdef UVR_HAVE_LIBDEFLATE
+#include <libdeflate.h>
+#else
+#include <zlib.h>
+#endif
 #include <pugixml.hpp>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
-#include <zlib.h>
 
 #include <algorithm>
 #include <array>
@@ -21,6 +25,7 @@
 #include <cmath>
 #include <cstring>
 #include <memory>
+#include <mutex>
 #include <string_view>
 
 namespace uvr {
@@ -297,6 +302,29 @@ struct Payload {
 /// allocated).
 constexpr uint64_t maxZlibRatio = 1032;
 
+/// Inflates one zlib block of known sizes; returns what is wrong with it, or nullptr.
+const char *inflateBlock(const uint8_t *source, uint64_t sourceSize, uint8_t *target, uint64_t targetSize) {
+#ifdef UVR_HAVE_LIBDEFLATE
+  thread_local std::unique_ptr<libdeflate_decompressor, void (*)(libdeflate_decompressor *)> decompressor(
+      libdeflate_alloc_decompressor(), libdeflate_free_decompressor);
+  size_t inflated = 0;
+  const libdeflate_result result =
+      libdeflate_zlib_decompress(decompressor.get(), source, sourceSize, target, targetSize, &inflated);
+  if (result == LIBDEFLATE_BAD_DATA)
+    return "invalid zlib data";
+  if (result == LIBDEFLATE_INSUFFICIENT_SPACE)
+    return "it inflates to more bytes than its header says";
+#else
+  uLongf inflated = targetSize;
+  const int result = ::uncompress(target, &inflated, source, sourceSize);
+  if (result == Z_BUF_ERROR && inflated == targetSize)
+    return "it inflates to more bytes than its header says";
+  if (result != Z_OK)
+    return "invalid zlib data";
+#endif
+  return inflated == targetSize ? nullptr : "it inflates to fewer bytes than its header says";
+}
+
 class VtuReader {
 public:
   explicit VtuReader(const std::string &path) : path_(path), file_(readFile(path)) {}
@@ -540,29 +568,32 @@ private:
     return payload;
   }
 
-  /// Writes the payload's uncompressed bytes to dst, inflating zlib blocks in parallel.
+  /// Writes the payload's uncompressed bytes to dst, inflating zlib blocks in parallel (with libdeflate: the
+  /// blocks' sizes are known, which is what its one-shot decompressor needs).
   void decode(const ArrayInfo &array, const Payload &payload, uint8_t *dst) const {
     if (payload.blocks.empty()) {
       std::memcpy(dst, payload.data, payload.size);
       return;
     }
-    std::atomic<int> status{Z_OK};
-    std::atomic<uint64_t> badBlock{0};
+    // The first corrupt block by index, so that the error does not depend on thread timing.
+    std::mutex mutex;
+    uint64_t badBlock = UINT64_MAX;
+    const char *why = "";
     tbb::parallel_for(size_t(0), payload.blocks.size(), [&](size_t i) {
       const Payload::Block &block = payload.blocks[i];
-      uLongf inflated = block.targetSize;
-      int rc = ::uncompress(dst + block.target, &inflated, payload.data + block.source, block.sourceSize);
-      if (rc == Z_OK && inflated != block.targetSize)
-        rc = Z_DATA_ERROR;
-      int expected = Z_OK;
-      if (rc != Z_OK && status.compare_exchange_strong(expected, rc))
+      const char *problem =
+          inflateBlock(payload.data + block.source, block.sourceSize, dst + block.target, block.targetSize);
+      if (!problem)
+        return;
+      const std::lock_guard<std::mutex> lock(mutex);
+      if (i < badBlock) {
         badBlock = i;
+        why = problem;
+      }
     });
-    if (status != Z_OK) {
-      const Payload::Block &block = payload.blocks[badBlock];
-      fail(array, payload.position + block.source,
-           "zlib block " + std::to_string(badBlock.load()) + " is corrupt (" + zError(status) + ")");
-    }
+    if (badBlock != UINT64_MAX)
+      fail(array, payload.position + payload.blocks[badBlock].source,
+           "zlib block " + std::to_string(badBlock) + " is corrupt (" + why + ")");
   }
 
   template <typename T> void parseAscii(const ArrayInfo &array, uint64_t count, T *out) const {

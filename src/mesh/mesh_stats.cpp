@@ -82,9 +82,14 @@ VolumeStats volumeStats(const Mesh &mesh) {
   const auto [lo, hi] = std::minmax_element(volumes.begin(), volumes.end());
   stats.min = *lo;
   stats.max = *hi;
-  auto middle = volumes.begin() + std::ptrdiff_t(count / 2);
-  std::nth_element(volumes.begin(), middle, volumes.end());
-  stats.median = *middle;
+  auto at = [&](uint64_t rank) {
+    auto it = volumes.begin() + std::ptrdiff_t(rank);
+    std::nth_element(volumes.begin(), it, volumes.end());
+    return *it;
+  };
+  stats.median = at(count / 2);
+  stats.p1 = at(count / 100);
+  stats.p99 = at(count - 1 - count / 100);
   return stats;
 }
 

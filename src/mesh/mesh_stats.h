@@ -11,6 +11,7 @@ double cellVolume(const MeshView &mesh, uint64_t cell);
 
 struct VolumeStats {
   double min = 0.0, median = 0.0, max = 0.0;
+  double p1 = 0.0, p99 = 0.0; ///< 1st and 99th percentiles: their ratio shows how graded a mesh is
 };
 
 VolumeStats volumeStats(const Mesh &mesh);

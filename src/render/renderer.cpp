@@ -111,9 +111,15 @@ void Renderer::prepare(Backend backend) const {
 #endif
 }
 
+#ifdef UVR_HAVE_CUDA
 std::string Renderer::deviceName() const { return cuda_ ? std::string(cuda_->deviceName()) : std::string(); }
 size_t Renderer::deviceMemoryBytes() const { return cuda_ ? cuda_->memoryBytes() : 0; }
 size_t Renderer::deviceSceneBytes() const { return cuda_ ? cuda_->sceneBytes() : 0; }
+#else
+std::string Renderer::deviceName() const { return {}; }
+size_t Renderer::deviceMemoryBytes() const { return 0; }
+size_t Renderer::deviceSceneBytes() const { return 0; }
+#endif
 
 Frame Renderer::render(const Camera &camera, const RenderSettings &settings) const {
   if (!tf_)

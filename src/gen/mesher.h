@@ -1,0 +1,33 @@
+// Unstructured meshes made from structured volumes: what `uvr gen` builds (methods in tet_mesher.cpp and
+// hex_mesher.cpp, and in the README).
+#pragma once
+
+#include "gen/volume.h"
+#include "mesh/mesh.h"
+
+#include <cstdint>
+#include <optional>
+
+namespace uvr {
+
+struct GenOptions {
+  uint64_t cells = 1000000;       ///< target cell count; the result lands within ±10 %
+  std::optional<float> threshold; ///< keep cells whose centroid value is ≥ this; default: Otsu's threshold
+  uint64_t seed = 0;              ///< seeds the jitter of the vertices
+  bool cellField = false;         ///< also store the value at each cell's centroid, as "<name>_cell"
+};
+
+/// Graded, conforming tetrahedral mesh of the part of `volume` that passes the threshold, with the volume
+/// sampled trilinearly at the vertices as a point field named after the volume.
+Mesh generateTetMesh(const Volume &volume, const GenOptions &options);
+
+/// Graded, conforming hexahedral mesh (a tensor grid whose spacing follows the field's variation per axis).
+Mesh generateHexMesh(const Volume &volume, const GenOptions &options);
+
+/// The volume at each cell's centroid (the mean of its corners), as the cell field "<name>_cell".
+ScalarField sampleCellCentroids(const Volume &volume, const Mesh &mesh);
+
+/// The threshold a run uses: the option's, else Otsu's.
+float effectiveThreshold(const Volume &volume, const GenOptions &options);
+
+} // namespace uvr
