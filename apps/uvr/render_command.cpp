@@ -133,7 +133,7 @@ void runRender(const RenderOptions &o) {
   renderer.setTransferFunction(TransferFunction(chooseColorMap(o), range.min, range.max));
 
   const Box3f bounds = mesh.bounds();
-  Camera camera = frameBounds(bounds, o.fovy);
+  Camera camera = frameBounds(bounds, o.fovy, float(width) / float(height));
   if (!o.at.empty())
     camera.at = parseVector(o.at, "at");
   if (!o.eye.empty())
