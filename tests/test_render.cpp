@@ -6,8 +6,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <string>
+#include <utility>
 #include <vector>
 
 using namespace uvr;
@@ -244,4 +246,21 @@ TEST(TransferFunction, MetadataMatchesAScanOfTheTable) {
     }
   EXPECT_EQ(tf.maxOpacity(0.f, 0.5f), 0.f);
   EXPECT_GT(tf.maxOpacity(0.f, 0.6f), 0.f);
+}
+
+// ParaView's reset camera: the bounding sphere touches the narrower of the two view angles and fits the
+// other.
+TEST(Camera, ResetCameraFitsTheBoundingSphereInBothAngles) {
+  const Box3f box{{-1.f, -2.f, 0.f}, {3.f, 1.f, 5.f}};
+  const float radius = 0.5f * length(box.size());
+  for (const auto [width, height] : {std::pair{400, 400}, std::pair{800, 400}, std::pair{300, 600}}) {
+    const Camera camera = frameBounds(box, 30.f, float(width) / float(height));
+    const CameraView view = makeCameraView(camera, width, height);
+    const float sphereHalfAngle = std::asin(radius / length(camera.eye - box.center()));
+    const float verticalHalfAngle = std::atan(length(view.up));
+    const float horizontalHalfAngle = std::atan(length(view.right));
+    EXPECT_NEAR(verticalHalfAngle, 15.f * float(M_PI) / 180.f, 1e-5f);
+    EXPECT_NEAR(sphereHalfAngle, std::min(verticalHalfAngle, horizontalHalfAngle), 1e-5f)
+        << width << "x" << height;
+  }
 }

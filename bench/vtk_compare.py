@@ -1,0 +1,276 @@
+#!/usr/bin/python3
+"""An independent check: renders the cases of the cases file's "vtk" section with VTK's
+vtkUnstructuredGridVolumeRayCastMapper and with uvr (reference and full), same mesh, transfer function, opacity
+unit and camera, and reports the time per frame of each and the SSIM between VTK's image and uvr's.
+
+Needs Debian's python3-vtk9 and an X display: run it under `xvfb-run -a` on a headless machine.
+
+usage: xvfb-run -a bench/vtk_compare.py UVR OUTDIR [--cases bench/cases.json] [--data ../shared/data] [--quick]
+                                        [--only NAME ...]
+
+Conventions matched (see README, "Conventions that differ from ParaView"):
+- Camera: both get the same explicit eye, focal point, view-up and vertical view angle.
+- Transfer function: the preset is stretched over the same scalar range; colours interpolate in the preset's
+  colour space (vtkColorTransferFunction); opacity points keep their midpoint and sharpness (vtkPiecewiseFunction).
+- Opacity: uvr reads a preset's opacity a as the opacity of a slab one unit thick, α = 1 − (1 − a)^(s/u), as
+  VTK's volume mappers for image data do. VTK's unstructured-grid ray integrators read the opacity function as an
+  attenuation coefficient τ per unit distance, α = 1 − exp(−τ·s/u). The same slab opacity needs
+  τ = −ln(1 − a), so VTK gets the opacity function resampled through that mapping.
+- Pixels: VTK's ray caster casts rays through pixel corners, uvr through pixel centres; VTK's window centre is
+  shifted by half a pixel to match.
+- Cells: VTK's ray cast mapper takes tetrahedra only; other meshes are split into tets by vtkDataSetTriangleFilter.
+"""
+import argparse
+import json
+import math
+import os
+import sys
+import time
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import uvr_bench as ub  # noqa: E402
+
+# VTK's Bunyk ray caster casts the ray of pixel (i, j) through the image-plane point (i, j) in pixel units, the
+# pixel's lower-left corner; uvr (like OpenGL rasterisation) casts it through the centre (i + 1/2, j + 1/2).
+# Shifting VTK's window centre by half a pixel lines the two up.
+PIXEL_SHIFT = (0.5, 0.5)
+# Opacity 1 is infinite attenuation; the cap leaves e^-25 of the light through a unit slab.
+MAX_ATTENUATION = 25.0
+TABLE_SAMPLES = 256
+
+
+def read_preset(path, name):
+    with open(path) as f:
+        presets = json.load(f)
+    if isinstance(presets, dict):
+        presets = [presets]
+    for preset in presets:
+        if "RGBPoints" in preset and (not name or preset.get("Name") == name):
+            return preset
+    sys.exit(f"{path}: no preset named {name!r}")
+
+
+def build_transfer_functions(vtk, preset, low, high):
+    """vtkColorTransferFunction and vtkPiecewiseFunction (attenuation per unit) for `preset` stretched over
+    [low, high], as uvr stretches it: the preset's own x range (colour and opacity points together) maps onto
+    the range."""
+    rgb = preset["RGBPoints"]
+    points = preset.get("Points") or [rgb[0], 0.0, 0.5, 0.0, rgb[-4], 1.0, 0.5, 0.0]
+    own_low = min(rgb[0], points[0])
+    own_high = max(rgb[-4], points[-4])
+    scale = (high - low) / (own_high - own_low) if own_high > own_low else 0.0
+
+    def stretch(x):
+        return low + (x - own_low) * scale
+
+    color = vtk.vtkColorTransferFunction()
+    space = preset.get("ColorSpace", "RGB").lower()
+    if space in ("lab", "cielab"):
+        color.SetColorSpaceToLab()
+    elif space == "lab/ciede2000":
+        color.SetColorSpaceToLabCIEDE2000()
+    elif space == "hsv":
+        color.SetColorSpaceToHSV()
+    elif space == "diverging":
+        color.SetColorSpaceToDiverging()
+    elif space == "step":
+        color.SetColorSpaceToStep()
+    else:
+        color.SetColorSpaceToRGB()
+    for i in range(0, len(rgb), 4):
+        color.AddRGBPoint(stretch(rgb[i]), rgb[i + 1], rgb[i + 2], rgb[i + 3])
+
+    opacity = vtk.vtkPiecewiseFunction()
+    for i in range(0, len(points), 4):
+        opacity.AddPoint(stretch(points[i]), points[i + 1], points[i + 2], points[i + 3])
+    # VTK's partial pre-integration takes the colour function's control points as the only nodes of both
+    # functions (9.1 collects only the first opacity point) and interpolates linearly in RGB between them; the
+    # dense resampling makes it follow the preset's colour space and the opacity between its points.
+    dense_color = vtk.vtkColorTransferFunction()
+    attenuation = vtk.vtkPiecewiseFunction()
+    for i in range(TABLE_SAMPLES):
+        x = low + (high - low) * i / (TABLE_SAMPLES - 1)
+        dense_color.AddRGBPoint(x, *color.GetColor(x))
+        a = min(max(opacity.GetValue(x), 0.0), 1.0)
+        attenuation.AddPoint(x, min(-math.log1p(-a), MAX_ATTENUATION) if a < 1.0 else MAX_ATTENUATION)
+    return dense_color, attenuation
+
+
+def render_vtk(vtk, mesh, case, field, camera, unit, size, frames, png, pixel_shift=(0.0, 0.0)):
+    """Renders `frames` frames; returns (first frame ms, later frames ms list, threads)."""
+    from vtk.util.numpy_support import vtk_to_numpy
+    from PIL import Image
+
+    reader = vtk.vtkXMLUnstructuredGridReader() if mesh.endswith(".vtu") else vtk.vtkUnstructuredGridReader()
+    reader.SetFileName(mesh)
+    reader.Update()
+    grid = reader.GetOutput()
+    types = vtk.vtkCellTypes()
+    grid.GetCellTypes(types)
+    if types.GetNumberOfTypes() != 1 or types.GetCellType(0) != vtk.VTK_TETRA:
+        split = vtk.vtkDataSetTriangleFilter()
+        split.SetInputData(grid)
+        split.TetrahedraOnlyOn()
+        split.Update()
+        grid = split.GetOutput()
+
+    mapper = vtk.vtkUnstructuredGridVolumeRayCastMapper()
+    mapper.SetInputData(grid)
+    if field["centering"] == "cell":
+        mapper.SetScalarModeToUseCellFieldData()
+    else:
+        mapper.SetScalarModeToUsePointFieldData()
+    mapper.SelectScalarArray(case["field"])
+    mapper.SetAutoAdjustSampleDistances(0)  # else VTK lowers the resolution to meet a frame-time target
+    mapper.SetImageSampleDistance(1.0)
+
+    preset = read_preset(ub.resolve(case["tf"], ""), case["tf_name"])
+    color, attenuation = build_transfer_functions(vtk, preset, field["min"], field["max"])
+    prop = vtk.vtkVolumeProperty()
+    prop.SetColor(color)
+    prop.SetScalarOpacity(attenuation)
+    prop.SetScalarOpacityUnitDistance(unit)
+    prop.ShadeOff()
+    prop.SetInterpolationTypeToLinear()
+    volume = vtk.vtkVolume()
+    volume.SetMapper(mapper)
+    volume.SetProperty(prop)
+
+    renderer = vtk.vtkRenderer()
+    renderer.SetBackground(0, 0, 0)
+    renderer.AddVolume(volume)
+    window = vtk.vtkRenderWindow()
+    window.SetOffScreenRendering(1)
+    window.AddRenderer(renderer)
+    width, height = (int(v) for v in size.split("x"))
+    window.SetSize(width, height)
+    vcam = renderer.GetActiveCamera()
+    vcam.SetPosition(*camera["eye"])
+    vcam.SetFocalPoint(*camera["at"])
+    vcam.SetViewUp(*camera["up"])
+    vcam.SetViewAngle(camera["fovy"])  # vertical, as UseHorizontalViewAngle is off
+    vcam.SetWindowCenter(2.0 * pixel_shift[0] / width, 2.0 * pixel_shift[1] / height)
+    renderer.ResetCameraClippingRange()
+
+    times = []
+    for _ in range(frames):
+        started = time.perf_counter()
+        window.Render()
+        times.append(1000.0 * (time.perf_counter() - started))
+    grab = vtk.vtkWindowToImageFilter()
+    grab.SetInput(window)
+    grab.SetInputBufferTypeToRGB()
+    grab.ReadFrontBufferOff()
+    grab.Update()
+    image = grab.GetOutput()
+    w, h, _ = image.GetDimensions()
+    pixels = vtk_to_numpy(image.GetPointData().GetScalars()).reshape(h, w, -1)[::-1]
+    Image.fromarray(pixels[:, :, :3].copy()).save(png)
+    return times[0], times[1:], mapper.GetNumberOfThreads()
+
+
+def compare_case(vtk, uvr, case, data_dir, outdir, keep_images):
+    mesh = ub.resolve(case["mesh"], data_dir)
+    info = ub.mesh_info(uvr, mesh)
+    field = ub.field_info(info, case["field"])
+    camera = ub.camera_for(case, info)
+    name = "".join(c if c.isalnum() else "_" for c in case["name"]).strip("_")
+    common = ["--field", case["field"], "--tf", ub.resolve(case["tf"], data_dir), "--tf-name", case["tf_name"],
+              "--size", case["size"], "--range", repr(field["min"]), repr(field["max"]), *ub.camera_args(camera)]
+    result = {"case": case, "camera": camera, "uvr": {}}
+    for mode in ("reference", "full"):
+        ub.log(f"{case['name']}: uvr {mode}")
+        stem = os.path.join(outdir, f"{name}_uvr_{mode}")
+        result["uvr"][mode] = ub.render(uvr, mesh, stem, common + ["--mode", mode, "--frames", case["uvr_frames"]])
+        os.remove(stem + "_samples.png")
+    unit = result["uvr"]["reference"]["unit"]
+    if case["ground_truth_divisor"]:
+        ub.log(f"{case['name']}: uvr ground truth")
+        stem = os.path.join(outdir, f"{name}_uvr_truth")
+        s1 = result["uvr"]["reference"]["s1"] / case["ground_truth_divisor"]
+        result["uvr"]["truth"] = ub.render(uvr, mesh, stem, common + ["--mode", "reference", "--s1", repr(s1),
+                                                                      "--unit", repr(unit), "--frames", 1])
+        os.remove(stem + "_samples.png")
+
+    ub.log(f"{case['name']}: VTK, {case['frames']} frames")
+    vtk_png = os.path.join(outdir, f"{name}_vtk.png")
+    first, later, threads = render_vtk(vtk, mesh, case, field, camera, unit, case["size"], case["frames"], vtk_png,
+                                       PIXEL_SHIFT)
+    result["vtk"] = {"first_ms": first, "later_ms": later, "threads": threads,
+                     "frame_ms": ub.median(later) if later else first}
+    for mode in result["uvr"]:
+        quality = ub.compare(uvr, vtk_png, os.path.join(outdir, f"{name}_uvr_{mode}.png"))
+        result["uvr"][mode]["ssim_vtk"] = quality["ssim"]
+        result["uvr"][mode]["psnr_vtk"] = quality["psnr"]
+    labels = ["VTK", "uvr reference", "uvr full"] + (["uvr truth"] if "truth" in result["uvr"] else [])
+    paths = [vtk_png] + [os.path.join(outdir, f"{name}_uvr_{m}.png") for m in result["uvr"]]
+    result["montage"] = f"{name}.png"
+    ub.montage(paths, labels, os.path.join(outdir, result["montage"]), 256)
+    if not keep_images:
+        for path in paths:
+            os.remove(path)
+    return result
+
+
+def write_report(results, outdir, command, machine):
+    f = ub.fmt
+    lines = ["# uvr against VTK's vtkUnstructuredGridVolumeRayCastMapper", "",
+             f"Machine: {machine['cpu']}, {machine['cores']} cores, load average {machine['load_average'][0]:.1f} "
+             f"(may be shared: times are indicative). Command: `{command}`.", "",
+             "VTK: 9.1 (Debian's python3-vtk9), vtkUnstructuredGridVolumeRayCastMapper (Bunyk ray casting, "
+             "partial pre-integration for point data), image sample distance 1, no automatic adjustment; its first "
+             "frame includes building its own structures. uvr: time per frame is the median over its frames, "
+             "excluding load and build (given separately). Same camera, range, preset and opacity unit "
+             "(see bench/vtk_compare.py for the opacity mapping).", "",
+             "| case | size | VTK first frame ms | VTK later frames ms | VTK threads | uvr reference ms | uvr full ms | "
+             "uvr load + build ms | full speed-up over VTK | SSIM VTK vs reference | SSIM VTK vs full | "
+             "SSIM VTK vs truth |", "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    for r in results:
+        u = r["uvr"]
+        truth = u.get("truth", {}).get("ssim_vtk")
+        lines.append(
+            f"| {r['case']['name']} | {r['case']['size']} | {f(r['vtk']['first_ms'], 0)} | "
+            f"{', '.join(f(t, 0) for t in r['vtk']['later_ms']) or '–'} | {r['vtk']['threads']} | "
+            f"{f(u['reference']['render_ms'], 0)} | {f(u['full']['render_ms'], 0)} | "
+            f"{f(u['full']['load_ms'] + u['full']['build_ms'], 0)} | "
+            f"{f(r['vtk']['frame_ms'] / u['full']['render_ms'], 1)}× | {f(u['reference']['ssim_vtk'], 4)} | "
+            f"{f(u['full']['ssim_vtk'], 4)} | {f(truth, 4)} |")
+    lines.append("")
+    for r in results:
+        lines += [f"![{r['case']['name']}]({r['montage']})", ""]
+    with open(os.path.join(outdir, "vtk_compare.md"), "w") as out:
+        out.write("\n".join(lines))
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("uvr")
+    parser.add_argument("outdir")
+    parser.add_argument("--cases", default=os.path.join(ub.REPO, "bench", "cases.json"))
+    parser.add_argument("--data", default=os.path.join(ub.REPO, "..", "shared", "data"))
+    parser.add_argument("--quick", action="store_true")
+    parser.add_argument("--only", nargs="+")
+    parser.add_argument("--keep-images", action="store_true", help="keep the full-size images in OUTDIR")
+    parser.add_argument("--size", help="override every case's image size, WxH")
+    parser.add_argument("--frames", type=int, help="override every case's VTK frame count")
+    args = parser.parse_args()
+    import vtk
+
+    uvr = os.path.abspath(args.uvr)
+    cases = ub.load_cases(args.cases, "vtk", args.quick)
+    if args.only:
+        cases = [c for c in cases if any(o in c["name"] for o in args.only)]
+    for case in cases:
+        case.update({k: v for k, v in (("size", args.size), ("frames", args.frames)) if v})
+    os.makedirs(args.outdir, exist_ok=True)
+    command = "xvfb-run -a bench/vtk_compare.py " + " ".join(sys.argv[1:])
+    machine = ub.machine()
+    results = [compare_case(vtk, uvr, case, args.data, args.outdir, args.keep_images) for case in cases]
+    write_report(results, args.outdir, command, machine)
+    with open(os.path.join(args.outdir, "vtk_compare.json"), "w") as out:
+        json.dump({"command": command, "machine": machine, "vtk": vtk.vtkVersion.GetVTKVersion(),
+                   "results": results}, out, indent=1)
+
+
+if __name__ == "__main__":
+    main()
