@@ -261,12 +261,15 @@ public:
     renderer_ = std::make_unique<Renderer>(mesh_->mesh, fieldIndex_, leafSize_);
   }
 
-  Camera defaultCamera(float fovy) const { return frameBounds(mesh_->mesh.bounds(), fovy); }
+  Camera defaultCamera(float fovy, float aspect) const {
+    return frameBounds(mesh_->mesh.bounds(), fovy, aspect);
+  }
 
-  /// None: the default camera; a dict's keys (eye, at, up, fovy) replace those of the default camera.
-  Camera toCamera(const py::object &object) const {
+  /// None: the default camera for an image of this aspect (width / height); a dict's keys (eye, at, up, fovy)
+  /// replace those of the default camera.
+  Camera toCamera(const py::object &object, float aspect) const {
     if (object.is_none())
-      return defaultCamera(30.f);
+      return defaultCamera(30.f, aspect);
     if (py::isinstance<Camera>(object))
       return object.cast<Camera>();
     const py::dict dict = object.cast<py::dict>();
@@ -275,7 +278,7 @@ public:
       if (key != "eye" && key != "at" && key != "up" && key != "fovy")
         throw Error("unknown camera key '" + key + "': expected eye, at, up, fovy");
     }
-    Camera camera = defaultCamera(dict.contains("fovy") ? dict["fovy"].cast<float>() : 30.f);
+    Camera camera = defaultCamera(dict.contains("fovy") ? dict["fovy"].cast<float>() : 30.f, aspect);
     if (dict.contains("at"))
       camera.at = toVec3(dict["at"], "at");
     if (dict.contains("eye"))
@@ -316,7 +319,7 @@ public:
     settings.background = toVec3(background, "background");
     settings.integrator = samplingSettings(parseMode(mode), defaultStep_, s1.value_or(0.f), s2.value_or(0.f),
                                            p.value_or(0.f), unit.value_or(0.f));
-    const Camera camera = toCamera(cameraObject);
+    const Camera camera = toCamera(cameraObject, float(width) / float(height));
     checkCamera(camera);
     setTransferFunction(tf ? *tf : PyTransferFunction{chooseColorMap(""), std::nullopt});
 
@@ -542,8 +545,9 @@ PYBIND11_MODULE(uvr, m) {
            py::arg("background") = py::make_tuple(0.f, 0.f, 0.f),
            "Returns an (h, w, 4) uint8 array: RGB composited over the background, and accumulated opacity x "
            "255")
-      .def("default_camera", &PyRenderer::defaultCamera, py::arg("fovy") = 30.f,
-           "ParaView's reset camera, as `uvr render` uses by default")
+      .def("default_camera", &PyRenderer::defaultCamera, py::arg("fovy") = 30.f, py::arg("aspect") = 1.f,
+           "ParaView's reset camera for an image of this aspect (width / height), as `uvr render` uses by "
+           "default")
       .def_property_readonly("last_stats", &PyRenderer::lastStats)
       .def_property_readonly("last_samples", &PyRenderer::lastSamples, "(h, w) uint32 samples per pixel")
       .def("heatmap", &PyRenderer::heatmap,

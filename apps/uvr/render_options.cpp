@@ -90,7 +90,9 @@ ValueRange transferRange(const RenderOptions &o, const ScalarField &field) {
 }
 
 Camera chooseCamera(const RenderOptions &o, const Mesh &mesh) {
-  Camera camera = frameBounds(mesh.bounds(), o.fovy);
+  int width, height;
+  parseSize(o.size, width, height);
+  Camera camera = frameBounds(mesh.bounds(), o.fovy, float(width) / float(height));
   if (!o.at.empty())
     camera.at = parseVector(o.at, "at");
   if (!o.eye.empty())

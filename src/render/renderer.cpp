@@ -105,7 +105,13 @@ void Renderer::prepare(Backend backend) const {
 #ifdef UVR_HAVE_CUDA
   if (!tf_)
     throw Error("no transfer function set");
-  cuda_ = std::make_shared<CudaRenderer>(sceneView(), sceneSizes());
+  // Leaves of up to 8 cells: a fraction of the nodes, and so of the GPU memory, for a few more cell tests.
+  const Bvh deviceBvh = collapseBvh(bvh_, 8);
+  SceneView scene = sceneView();
+  scene.bvh = deviceBvh.view();
+  SceneSizes sizes = sceneSizes();
+  sizes.bvhNodes = deviceBvh.nodes.size();
+  cuda_ = std::make_shared<CudaRenderer>(scene, sizes);
 #else
   throw Error("this uvr was built without CUDA: use --backend cpu");
 #endif
