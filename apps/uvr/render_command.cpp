@@ -49,15 +49,19 @@ void runRender(const RenderCommandOptions &o) {
   const Camera camera = chooseCamera(o.view, mesh);
   renderer.prepare(settings.backend); // uploads the scene for CUDA, outside the frame times
 
-  std::vector<double> times;
+  std::vector<double> times, kernelTimes;
   Frame frame;
   for (int i = 0; i < o.frames; ++i) {
     const Timer timer;
     frame = renderer.render(camera, settings);
     times.push_back(timer.milliseconds());
+    kernelTimes.push_back(frame.kernelMs);
   }
-  std::sort(times.begin(), times.end());
-  const double renderMs = times[times.size() / 2];
+  const auto median = [](std::vector<double> &v) {
+    std::sort(v.begin(), v.end());
+    return v[v.size() / 2];
+  };
+  const double renderMs = median(times);
 
   writePng(o.output, frame.image);
   if (!o.heatmap.empty())
@@ -73,6 +77,8 @@ void runRender(const RenderCommandOptions &o) {
     stats["load_ms"] = loaded.loadMs;
     stats["time_step"] = o.view.timeStep;
     stats["frames"] = o.frames;
+    if (settings.backend == Backend::Cuda)
+      stats["gpu_kernel_ms"] = median(kernelTimes);
     writeStats(o.stats, stats);
   }
 }

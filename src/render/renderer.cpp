@@ -149,7 +149,7 @@ Frame Renderer::render(const Camera &camera, const RenderSettings &settings) con
   if (settings.backend == Backend::Cuda) {
     prepare(Backend::Cuda);
 #ifdef UVR_HAVE_CUDA
-    cuda_->render(view, settings.integrator, target, settings.height);
+    frame.kernelMs = cuda_->render(view, settings.integrator, target, settings.height);
 #endif
   } else {
     renderCpu(sceneView(), view, settings, target);

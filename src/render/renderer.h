@@ -46,6 +46,7 @@ struct Frame {
   std::vector<uint32_t> samplesPerPixel; ///< row-major, top row first
   uint64_t samplesTotal = 0;
   uint32_t samplesMax = 0;
+  double kernelMs = 0.0; ///< the GPU's time in the render kernel alone (CUDA), without copies; 0 on the CPU
 };
 
 class Renderer {

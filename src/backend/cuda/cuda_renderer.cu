@@ -95,6 +95,12 @@ struct CudaRenderer::Impl {
   DeviceBuffer<uint8_t> rgb;
   DeviceBuffer<float> opacity;
   DeviceBuffer<uint32_t> samples;
+  cudaEvent_t kernelStart = nullptr, kernelEnd = nullptr; // around the render kernel
+
+  ~Impl() {
+    cudaEventDestroy(kernelStart);
+    cudaEventDestroy(kernelEnd);
+  }
 };
 
 CudaRenderer::CudaRenderer(const SceneView &host, const SceneSizes &sizes) : impl_(std::make_unique<Impl>()) {
@@ -108,6 +114,8 @@ CudaRenderer::CudaRenderer(const SceneView &host, const SceneSizes &sizes) : imp
   impl_->deviceName = properties.name;
 
   Impl &d = *impl_;
+  UVR_CUDA_CHECK(cudaEventCreate(&d.kernelStart));
+  UVR_CUDA_CHECK(cudaEventCreate(&d.kernelEnd));
   SceneView &scene = d.scene;
   scene = host;
   const MeshView &mesh = host.mesh;
@@ -140,8 +148,8 @@ void CudaRenderer::updateTransferFunction(const SceneView &host, const SceneSize
   d.scene.nodeMaxOpacity = d.nodeMaxOpacity.upload(host.nodeMaxOpacity, sizes.partitionNodes);
 }
 
-void CudaRenderer::render(const CameraView &camera, const IntegratorSettings &settings,
-                          const PixelTarget &target, int height) {
+double CudaRenderer::render(const CameraView &camera, const IntegratorSettings &settings,
+                            const PixelTarget &target, int height) {
   Impl &d = *impl_;
   const size_t pixels = size_t(target.width) * size_t(height);
   d.rgb.resize(3 * pixels);
@@ -154,12 +162,17 @@ void CudaRenderer::render(const CameraView &camera, const IntegratorSettings &se
   const dim3 block(16, 8);
   const dim3 grid((unsigned(target.width) + block.x - 1) / block.x,
                   (unsigned(height) + block.y - 1) / block.y);
+  UVR_CUDA_CHECK(cudaEventRecord(d.kernelStart));
   renderKernel<<<grid, block>>>(d.scene, settings, camera, device, height);
   UVR_CUDA_CHECK(cudaGetLastError());
+  UVR_CUDA_CHECK(cudaEventRecord(d.kernelEnd));
   UVR_CUDA_CHECK(cudaDeviceSynchronize()); // a kernel fault surfaces here
+  float kernelMs = 0.f;
+  UVR_CUDA_CHECK(cudaEventElapsedTime(&kernelMs, d.kernelStart, d.kernelEnd));
   d.rgb.download(target.rgb, 3 * pixels);
   d.opacity.download(target.opacity, pixels);
   d.samples.download(target.samples, pixels);
+  return kernelMs;
 }
 
 size_t CudaRenderer::memoryBytes() const {

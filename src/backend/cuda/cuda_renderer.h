@@ -30,8 +30,9 @@ public:
   void updateTransferFunction(const SceneView &scene, const SceneSizes &sizes);
 
   /// Renders into `target`'s host buffers (width x height pixels).
-  void render(const CameraView &camera, const IntegratorSettings &settings, const PixelTarget &target,
-              int height);
+  /// Draws a frame into the host `target`; returns the milliseconds the kernel took on the GPU.
+  double render(const CameraView &camera, const IntegratorSettings &settings, const PixelTarget &target,
+                int height);
 
   /// Device memory held: the scene alone (mesh, field, acceleration, partitions, transfer function), and all
   /// of it including the frame buffers.
