@@ -11,6 +11,7 @@
 #include <cstdint>
 #include <cstdlib>
 #include <string>
+#include <type_traits>
 
 namespace uvr::fuzz {
 
@@ -23,12 +24,15 @@ inline const std::string &inputFile(const uint8_t *data, size_t size) {
   return path;
 }
 
-/// Reads the input with `read` and builds the mesh: a uvr::Error is the expected answer to a bad file;
-/// anything else (another exception, a crash, a sanitizer report) is a finding.
+/// Reads the input with `read` and, where it gives an unstructured grid, builds the mesh: a uvr::Error is the
+/// expected answer to a bad file; anything else (another exception, a crash, a sanitizer report) is a finding.
 template <typename Read> int readInput(const uint8_t *data, size_t size, Read &&read) {
   const std::string &path = inputFile(data, size);
   try {
-    buildMesh(read(path), path);
+    if constexpr (std::is_same_v<decltype(read(path)), UnstructuredGrid>)
+      buildMesh(read(path), path);
+    else
+      read(path);
   } catch (const Error &) {
   }
   return 0;

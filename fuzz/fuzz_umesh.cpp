@@ -1,0 +1,6 @@
+#include "fuzz_input.h"
+#include "io/mesh_io.h"
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
+  return uvr::fuzz::readInput(data, size, [](const std::string &path) { return uvr::readUmesh(path); });
+}
