@@ -25,7 +25,8 @@ inline const std::string &inputFile(const uint8_t *data, size_t size) {
 }
 
 /// Reads the input with `read` and, where it gives an unstructured grid, builds the mesh: a uvr::Error is the
-/// expected answer to a bad file; anything else (another exception, a crash, a sanitizer report) is a finding.
+/// expected answer to a bad file; anything else (another exception, a crash, a sanitizer report) is a
+/// finding.
 template <typename Read> int readInput(const uint8_t *data, size_t size, Read &&read) {
   const std::string &path = inputFile(data, size);
   try {
