@@ -2,9 +2,13 @@
 
 #include "core/error.h"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_reduce.h>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <functional>
 #include <string>
 
 namespace uvr {
@@ -189,8 +193,9 @@ Mesh buildMesh(std::vector<Vec3f> &&points, CellArraysView grid, std::vector<Sca
   mesh.pyramids.resize(perType[1] * 5);
   mesh.wedges.resize(perType[2] * 6);
   mesh.hexes.resize(perType[3] * 8);
-  std::array<uint32_t *, 4> cursor = {mesh.tets.data(), mesh.pyramids.data(), mesh.wedges.data(),
-                                      mesh.hexes.data()};
+  const std::array<uint32_t *, 4> typeCells = {mesh.tets.data(), mesh.pyramids.data(), mesh.wedges.data(),
+                                               mesh.hexes.data()};
+  std::array<uint32_t *, 4> cursor = typeCells;
   const std::array<uint64_t, 4> firstCell = {0, perType[0], perType[0] + perType[1],
                                              perType[0] + perType[1] + perType[2]};
   std::array<uint64_t, 4> next = firstCell;
@@ -214,10 +219,23 @@ Mesh buildMesh(std::vector<Vec3f> &&points, CellArraysView grid, std::vector<Sca
       std::swap(v[2], v[3]);
       std::swap(v[6], v[7]);
     }
-    if (orientCell(kind.type, v, points))
-      ++mesh.invertedCells;
     cursor[s] += kind.corners;
     fileToMesh[c] = next[s]++;
+  }
+
+  // Winding, in parallel: each cell on its own.
+  const CellKind kinds[] = {
+      {CellType::Tetra, 4}, {CellType::Pyramid, 5}, {CellType::Wedge, 6}, {CellType::Hexahedron, 8}};
+  for (int s = 0; s < 4; ++s) {
+    const CellKind kind = kinds[s];
+    mesh.invertedCells += tbb::parallel_reduce(
+        tbb::blocked_range<size_t>(0, perType[size_t(s)]), uint64_t(0),
+        [&](const tbb::blocked_range<size_t> &range, uint64_t inverted) {
+          for (size_t c = range.begin(); c < range.end(); ++c)
+            inverted += orientCell(kind.type, typeCells[size_t(s)] + c * size_t(kind.corners), points);
+          return inverted;
+        },
+        std::plus<>());
   }
 
   mesh.points = std::move(points);

@@ -1,7 +1,6 @@
 #include "mesh/mesh.h"
 
 #include <tbb/parallel_for.h>
-#include <tbb/parallel_sort.h>
 
 #include <algorithm>
 #include <numeric>
@@ -9,14 +8,17 @@
 namespace uvr {
 namespace {
 
-// Spreads the low 21 bits of `v` so that two zero bits follow each.
-uint64_t spreadBits(uint64_t v) {
-  v &= 0x1fffff;
-  v = (v | v << 32) & 0x1f00000000ffffull;
-  v = (v | v << 16) & 0x1f0000ff0000ffull;
-  v = (v | v << 8) & 0x100f00f00f00f00full;
-  v = (v | v << 4) & 0x10c30c30c30c30c3ull;
-  v = (v | v << 2) & 0x1249249249249249ull;
+// A 30-bit Morton code (a 1024³ grid over the mesh bounds): fine enough to order a billion cells for
+// locality, and small enough to sit beside a 32-bit cell index in one 64-bit key.
+constexpr int kMortonBits = 10;
+
+// Spreads the low 10 bits of `v` so that two zero bits follow each.
+uint32_t spreadBits(uint32_t v) {
+  v &= 0x3ff;
+  v = (v | v << 16) & 0x030000ffu;
+  v = (v | v << 8) & 0x0300f00fu;
+  v = (v | v << 4) & 0x030c30c3u;
+  v = (v | v << 2) & 0x09249249u;
   return v;
 }
 
@@ -25,55 +27,68 @@ struct MortonQuantizer {
 
   explicit MortonQuantizer(const Box3f &box) : lower(box.lower) {
     const Vec3f extent = box.upper - box.lower;
-    constexpr float kCells = float(1 << 21) - 1.f;
+    constexpr float kCells = float(1 << kMortonBits) - 1.f;
     scale = {extent.x > 0.f ? kCells / extent.x : 0.f, extent.y > 0.f ? kCells / extent.y : 0.f,
              extent.z > 0.f ? kCells / extent.z : 0.f};
   }
-  uint64_t code(Vec3f p) const {
+  uint32_t code(Vec3f p) const {
+    constexpr float kLast = float(1 << kMortonBits) - 1.f;
     const Vec3f d = p - lower;
-    const Vec3f q{d.x * scale.x, d.y * scale.y, d.z * scale.z};
-    return spreadBits(uint64_t(clampf(q.x, 0.f, 2097151.f))) |
-           spreadBits(uint64_t(clampf(q.y, 0.f, 2097151.f))) << 1 |
-           spreadBits(uint64_t(clampf(q.z, 0.f, 2097151.f))) << 2;
+    return spreadBits(uint32_t(clampf(d.x * scale.x, 0.f, kLast))) |
+           spreadBits(uint32_t(clampf(d.y * scale.y, 0.f, kLast))) << 1 |
+           spreadBits(uint32_t(clampf(d.z * scale.z, 0.f, kLast))) << 2;
   }
 };
 
-struct Keyed {
-  uint64_t code;
-  uint32_t index;
-  bool operator<(const Keyed &other) const {
-    return code < other.code || (code == other.code && index < other.index);
+/// Sorts keys (code << 32 | index) by their code, ties in index order: a stable LSD radix sort on the code's
+/// 30 bits, three passes of 10.
+void radixSortByCode(std::vector<uint64_t> &keys) {
+  constexpr int kDigitBits = 10;
+  constexpr size_t kBuckets = size_t(1) << kDigitBits;
+  std::vector<uint64_t> scratch(keys.size());
+  for (int shift = 32; shift < 32 + 3 * kMortonBits; shift += kDigitBits) {
+    std::vector<size_t> start(kBuckets + 1, 0);
+    for (uint64_t key : keys)
+      ++start[((key >> shift) & (kBuckets - 1)) + 1];
+    for (size_t b = 1; b <= kBuckets; ++b)
+      start[b] += start[b - 1];
+    for (uint64_t key : keys)
+      scratch[start[(key >> shift) & (kBuckets - 1)]++] = key;
+    keys.swap(scratch);
   }
-};
+}
 
 /// Sorts the cells of one type array by the Morton code of their centroids; returns the new order
 /// (order[newIndex] = oldIndex), or an empty vector when the cells are already in that order.
 std::vector<uint32_t> mortonOrder(const std::vector<uint32_t> &cells, int corners,
                                   const std::vector<Vec3f> &points, const MortonQuantizer &quantizer) {
   const size_t count = cells.size() / size_t(corners);
-  std::vector<Keyed> keys(count);
+  std::vector<uint64_t> keys(count);
   tbb::parallel_for(size_t(0), count, [&](size_t c) {
     Vec3f sum{0.f, 0.f, 0.f};
     for (int i = 0; i < corners; ++i)
       sum = sum + points[cells[c * size_t(corners) + size_t(i)]];
-    keys[c] = {quantizer.code(sum * (1.f / float(corners))), uint32_t(c)};
+    keys[c] = uint64_t(quantizer.code(sum * (1.f / float(corners)))) << 32 | uint64_t(c);
   });
   if (std::is_sorted(keys.begin(), keys.end()))
     return {};
-  tbb::parallel_sort(keys.begin(), keys.end());
+  radixSortByCode(keys);
   std::vector<uint32_t> order(count);
-  tbb::parallel_for(size_t(0), count, [&](size_t i) { order[i] = keys[i].index; });
+  tbb::parallel_for(size_t(0), count, [&](size_t i) { order[i] = uint32_t(keys[i]); });
   return order;
 }
 
-template <typename T>
-void permute(std::vector<T> &values, const std::vector<uint32_t> &order, size_t stride, size_t offset = 0) {
-  std::vector<T> copy(values.begin() + std::ptrdiff_t(offset * stride),
-                      values.begin() + std::ptrdiff_t((offset + order.size()) * stride));
+/// Item offset + i becomes the old item offset + order[i], for items of `Stride` elements (a constant, so
+/// that an item's copy is a few moves and no memmove call).
+template <size_t Stride, typename T>
+void permute(std::vector<T> &values, const std::vector<uint32_t> &order, size_t offset = 0) {
+  const T *source = values.data() + offset * Stride;
+  std::vector<T> permuted(order.size() * Stride);
   tbb::parallel_for(size_t(0), order.size(), [&](size_t i) {
-    std::copy_n(copy.begin() + std::ptrdiff_t(size_t(order[i]) * stride), stride,
-                values.begin() + std::ptrdiff_t((offset + i) * stride));
+    for (size_t k = 0; k < Stride; ++k)
+      permuted[i * Stride + k] = source[size_t(order[i]) * Stride + k];
   });
+  std::copy(permuted.begin(), permuted.end(), values.begin() + std::ptrdiff_t(offset * Stride));
 }
 
 } // namespace
@@ -84,30 +99,28 @@ void orderSpatially(Mesh &mesh) {
   const MortonQuantizer quantizer(mesh.bounds());
 
   // Cells: each type array on its own, so that the type order (and thus cell indices' meaning) is kept.
-  struct TypeArray {
-    std::vector<uint32_t> *cells;
-    int corners;
-  };
-  const TypeArray arrays[] = {{&mesh.tets, 4}, {&mesh.pyramids, 5}, {&mesh.wedges, 6}, {&mesh.hexes, 8}};
   size_t firstCell = 0;
-  for (const TypeArray &array : arrays) {
-    const size_t count = array.cells->size() / size_t(array.corners);
-    const std::vector<uint32_t> order = mortonOrder(*array.cells, array.corners, mesh.points, quantizer);
+  auto orderCells = [&]<size_t Corners>(std::vector<uint32_t> &cells) {
+    const std::vector<uint32_t> order = mortonOrder(cells, int(Corners), mesh.points, quantizer);
     if (!order.empty()) {
-      permute(*array.cells, order, size_t(array.corners));
+      permute<Corners>(cells, order);
       for (ScalarField &field : mesh.fields)
         if (field.centering == Centering::Cell)
-          permute(field.values, order, 1, firstCell);
+          permute<1>(field.values, order, firstCell);
     }
-    firstCell += count;
-  }
+    firstCell += cells.size() / Corners;
+  };
+  orderCells.operator()<4>(mesh.tets);
+  orderCells.operator()<5>(mesh.pyramids);
+  orderCells.operator()<6>(mesh.wedges);
+  orderCells.operator()<8>(mesh.hexes);
 
   // Points: numbered by first use in the new cell order, so that a cell's corners lie close in memory.
   constexpr uint32_t kUnused = 0xffffffffu;
   std::vector<uint32_t> newIndex(mesh.points.size(), kUnused);
   uint32_t next = 0;
-  for (const TypeArray &array : arrays)
-    for (uint32_t &v : *array.cells) {
+  for (std::vector<uint32_t> *cells : {&mesh.tets, &mesh.pyramids, &mesh.wedges, &mesh.hexes})
+    for (uint32_t &v : *cells) {
       if (newIndex[v] == kUnused)
         newIndex[v] = next++;
       v = newIndex[v];
@@ -118,10 +131,10 @@ void orderSpatially(Mesh &mesh) {
   std::vector<uint32_t> order(mesh.points.size());
   for (size_t i = 0; i < order.size(); ++i)
     order[newIndex[i]] = uint32_t(i);
-  permute(mesh.points, order, 1);
+  permute<1>(mesh.points, order);
   for (ScalarField &field : mesh.fields)
     if (field.centering == Centering::Point)
-      permute(field.values, order, 1);
+      permute<1>(field.values, order);
 }
 
 } // namespace uvr
