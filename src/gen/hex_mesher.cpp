@@ -28,13 +28,6 @@ namespace {
 constexpr double kDensityFloor = 0.04;
 constexpr double kJitter = 0.04;
 
-uint64_t mix(uint64_t x) { // splitmix64's finaliser
-  x += 0x9e3779b97f4a7c15ull;
-  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
-  x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
-  return x ^ (x >> 31);
-}
-
 class HexMesher {
 public:
   HexMesher(const Volume &volume, const GenOptions &options)

@@ -10,6 +10,14 @@
 
 namespace uvr {
 
+/// splitmix64's finaliser: a well-mixed 64-bit hash, for jitter that depends on the inputs alone.
+inline uint64_t mix(uint64_t x) {
+  x += 0x9e3779b97f4a7c15ull;
+  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
+  x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
+  return x ^ (x >> 31);
+}
+
 struct GenOptions {
   uint64_t cells = 1000000;       ///< target cell count; the result lands within ±10 %
   std::optional<float> threshold; ///< keep cells whose centroid value is ≥ this; default: Otsu's threshold

@@ -25,6 +25,7 @@
 #include "gen/mesher.h"
 
 #include "core/error.h"
+#include "core/morton.h"
 #include "core/progress.h"
 
 #include <tbb/enumerable_thread_specific.h>
@@ -48,36 +49,7 @@ constexpr double kTetsPerLeafGuess = 36.0;             // about what the brain s
 constexpr double kJitter = 1.0 / 64.0;
 constexpr int kSlots = 125; // 5×5×5 lattice points of a leaf at a quarter of its side
 
-uint64_t spread3(uint32_t v) {
-  uint64_t x = v & 0x1fffff;
-  x = (x | x << 32) & 0x1f00000000ffffull;
-  x = (x | x << 16) & 0x1f0000ff0000ffull;
-  x = (x | x << 8) & 0x100f00f00f00f00full;
-  x = (x | x << 4) & 0x10c30c30c30c30c3ull;
-  x = (x | x << 2) & 0x1249249249249249ull;
-  return x;
-}
-
-uint32_t compact3(uint64_t x) {
-  x &= 0x1249249249249249ull;
-  x = (x ^ (x >> 2)) & 0x10c30c30c30c30c3ull;
-  x = (x ^ (x >> 4)) & 0x100f00f00f00f00full;
-  x = (x ^ (x >> 8)) & 0x1f0000ff0000ffull;
-  x = (x ^ (x >> 16)) & 0x1f00000000ffffull;
-  x = (x ^ (x >> 32)) & 0x1fffffull;
-  return uint32_t(x);
-}
-
-uint64_t morton(int64_t x, int64_t y, int64_t z) {
-  return spread3(uint32_t(x)) | spread3(uint32_t(y)) << 1 | spread3(uint32_t(z)) << 2;
-}
-
-uint64_t mix(uint64_t x) { // splitmix64's finaliser
-  x += 0x9e3779b97f4a7c15ull;
-  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
-  x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
-  return x ^ (x >> 31);
-}
+uint64_t morton(int64_t x, int64_t y, int64_t z) { return mortonCode(uint32_t(x), uint32_t(y), uint32_t(z)); }
 
 struct Mask128 {
   uint64_t word[2] = {0, 0};
@@ -470,7 +442,8 @@ void TetMesher::balance() {
       if (level < 2)
         return;
       const int64_t s = side(level);
-      const int64_t x = compact3(codes_[i]), y = compact3(codes_[i] >> 1), z = compact3(codes_[i] >> 2);
+      const int64_t x = compactBits3(codes_[i]), y = compactBits3(codes_[i] >> 1),
+                    z = compactBits3(codes_[i] >> 2);
       for (int d = 0; d < 27; ++d) {
         if (d == 13)
           continue;
@@ -497,7 +470,8 @@ void TetMesher::balance() {
         levels.push_back(levels_[i]);
         continue;
       }
-      const int64_t x = compact3(codes_[i]), y = compact3(codes_[i] >> 1), z = compact3(codes_[i] >> 2);
+      const int64_t x = compactBits3(codes_[i]), y = compactBits3(codes_[i] >> 1),
+                    z = compactBits3(codes_[i] >> 2);
       const int64_t half = side(levels_[i] + 1);
       for (int c = 0; c < 8; ++c) {
         const int64_t cx = x + (c & 1) * half, cy = y + (c >> 1 & 1) * half, cz = z + (c >> 2) * half;
@@ -515,7 +489,8 @@ void TetMesher::balance() {
 
 void TetMesher::neighbourLevels(int64_t leaf, int *levels) const {
   const int64_t s = side(levels_[leaf]);
-  const int64_t x = compact3(codes_[leaf]), y = compact3(codes_[leaf] >> 1), z = compact3(codes_[leaf] >> 2);
+  const int64_t x = compactBits3(codes_[leaf]), y = compactBits3(codes_[leaf] >> 1),
+                z = compactBits3(codes_[leaf] >> 2);
   for (int d = 0; d < 27; ++d) {
     const int64_t j =
         d == 13 ? leaf : locate(x + (d % 3 - 1) * s, y + (d / 3 % 3 - 1) * s, z + (d / 9 - 1) * s);
@@ -538,7 +513,8 @@ int64_t TetMesher::ownerOf(const int64_t *q) const {
 
 int TetMesher::slotIn(int64_t leaf, const int64_t *q) const {
   const int64_t s = side(levels_[leaf]);
-  const int64_t lo[3] = {compact3(codes_[leaf]), compact3(codes_[leaf] >> 1), compact3(codes_[leaf] >> 2)};
+  const int64_t lo[3] = {compactBits3(codes_[leaf]), compactBits3(codes_[leaf] >> 1),
+                         compactBits3(codes_[leaf] >> 2)};
   int local[3];
   for (int a = 0; a < 3; ++a) {
     const int64_t offset = q[a] - 4 * lo[a];
@@ -553,9 +529,9 @@ int TetMesher::slotIn(int64_t leaf, const int64_t *q) const {
 void slotPosition(uint64_t code, int level, int slot, int64_t *q) {
   const int64_t s = kRootSide >> level;
   const auto c = slotCoords(slot);
-  q[0] = 4 * int64_t(compact3(code)) + c[0] * s;
-  q[1] = 4 * int64_t(compact3(code >> 1)) + c[1] * s;
-  q[2] = 4 * int64_t(compact3(code >> 2)) + c[2] * s;
+  q[0] = 4 * int64_t(compactBits3(code)) + c[0] * s;
+  q[1] = 4 * int64_t(compactBits3(code >> 1)) + c[1] * s;
+  q[2] = 4 * int64_t(compactBits3(code >> 2)) + c[2] * s;
 }
 
 bool TetMesher::keeps(uint64_t code, int level, const LocalTet &tet) const {

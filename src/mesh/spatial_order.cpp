@@ -1,5 +1,7 @@
 #include "mesh/mesh.h"
 
+#include "core/morton.h"
+
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -11,16 +13,6 @@ namespace {
 // A 30-bit Morton code (a 1024³ grid over the mesh bounds): fine enough to order a billion cells for
 // locality, and small enough to sit beside a 32-bit cell index in one 64-bit key.
 constexpr int kMortonBits = 10;
-
-// Spreads the low 10 bits of `v` so that two zero bits follow each.
-uint32_t spreadBits(uint32_t v) {
-  v &= 0x3ff;
-  v = (v | v << 16) & 0x030000ffu;
-  v = (v | v << 8) & 0x0300f00fu;
-  v = (v | v << 4) & 0x030c30c3u;
-  v = (v | v << 2) & 0x09249249u;
-  return v;
-}
 
 struct MortonQuantizer {
   Vec3f lower, scale;
@@ -34,9 +26,9 @@ struct MortonQuantizer {
   uint32_t code(Vec3f p) const {
     constexpr float kLast = float(1 << kMortonBits) - 1.f;
     const Vec3f d = p - lower;
-    return spreadBits(uint32_t(clampf(d.x * scale.x, 0.f, kLast))) |
-           spreadBits(uint32_t(clampf(d.y * scale.y, 0.f, kLast))) << 1 |
-           spreadBits(uint32_t(clampf(d.z * scale.z, 0.f, kLast))) << 2;
+    return uint32_t(mortonCode(uint32_t(clampf(d.x * scale.x, 0.f, kLast)),
+                               uint32_t(clampf(d.y * scale.y, 0.f, kLast)),
+                               uint32_t(clampf(d.z * scale.z, 0.f, kLast))));
   }
 };
 
