@@ -14,7 +14,8 @@ namespace {
 // The four outward face planes of a tet, to tell voxels that cannot touch it.
 struct TetPlanes {
   Vec3f normal[4];
-  float offset[4]; // a point q is beyond face i when dot(normal[i], q) > offset[i]
+  float offset[4];         // a point q is beyond face i when dot(normal[i], q) > offset[i]
+  float inverseNormalX[4]; // 1 / normal[i].x, or 0 where that is 0
 
   bool set(const MeshView &mesh, uint64_t tet) {
     const uint32_t *v = mesh.tets + 4 * tet;
@@ -27,6 +28,7 @@ struct TetPlanes {
       if (!(dot(n, n) > 0.f))
         return false; // degenerate: keep its whole box
       normal[i] = n;
+      inverseNormalX[i] = n.x != 0.f ? 1.f / n.x : 0.f;
       // Padded by a relative epsilon so that rounding never clears a voxel the tet touches.
       offset[i] = dot(n, a) + 1e-4f * (fabsf(n.x) * (fabsf(a.x) + 1.f) + fabsf(n.y) * (fabsf(a.y) + 1.f) +
                                        fabsf(n.z) * (fabsf(a.z) + 1.f));
@@ -34,18 +36,40 @@ struct TetPlanes {
     return true;
   }
 
-  /// True when the box [lower, lower + size] lies wholly beyond one face plane.
-  bool excludes(Vec3f lower, Vec3f size) const {
-    for (int i = 0; i < 4; ++i) {
+  /// Narrows [first, last] to the voxels x of a row (voxel x spans [rowX + x * size.x, + size.x] at fixed y
+  /// and z spans starting at rowY and rowZ) that lie beyond none of the face planes. A box lies beyond plane
+  /// i when its corner nearest along the normal does; along the row that is one linear inequality in x.
+  void clipRow(float rowX, float rowY, float rowZ, Vec3f size, float inverseSizeX, int &first,
+               int &last) const {
+    for (int i = 0; i < 4 && first <= last; ++i) {
       const Vec3f n = normal[i];
-      const Vec3f nearest{n.x > 0.f ? lower.x : lower.x + size.x, n.y > 0.f ? lower.y : lower.y + size.y,
-                          n.z > 0.f ? lower.z : lower.z + size.z};
-      if (dot(n, nearest) > offset[i])
-        return true;
+      const float nearY = n.y > 0.f ? rowY : rowY + size.y, nearZ = n.z > 0.f ? rowZ : rowZ + size.z;
+      const float rest = offset[i] - n.y * nearY - n.z * nearZ; // the box is kept where n.x * nearX <= rest
+      const float bound = (rest * inverseNormalX[i] - rowX) * inverseSizeX;
+      const float lowest = float(first - 1), highest = float(last + 1); // keeps the casts below in range
+      if (n.x > 0.f)                                                    // nearX = rowX + x * size.x
+        last = std::min(last, int(std::floor(std::clamp(bound, lowest, highest))));
+      else if (n.x < 0.f) // nearX = rowX + (x + 1) * size.x
+        first = std::max(first, int(std::ceil(std::clamp(bound - 1.f, lowest, highest))));
+      else if (rest < 0.f)
+        last = first - 1;
     }
-    return false;
   }
 };
+
+/// Sets bits [begin, end] of `bits`, which other threads set too.
+void setBits(std::vector<uint64_t> &bits, uint64_t begin, uint64_t end) {
+  for (uint64_t w = begin >> 6; w <= end >> 6; ++w) {
+    uint64_t mask = ~uint64_t(0);
+    if (w == begin >> 6)
+      mask &= ~uint64_t(0) << (begin & 63);
+    if (w == end >> 6)
+      mask &= ~uint64_t(0) >> (63 - (end & 63));
+    std::atomic_ref<uint64_t> word(bits[w]);
+    if ((word.load(std::memory_order_relaxed) & mask) != mask)
+      word.fetch_or(mask, std::memory_order_relaxed);
+  }
+}
 
 void voxelRange(float lo, float hi, float origin, float scale, int count, int &first, int &last) {
   first = std::clamp(int(std::floor((lo - origin) * scale)), 0, count - 1);
@@ -80,6 +104,7 @@ OccupancyGrid buildOccupancyGrid(const MeshView &mesh, float voxelsPerCell) {
   grid.bits.assign((total + 63) / 64, 0);
 
   const Vec3f voxelSize{size.x / float(grid.nx), size.y / float(grid.ny), size.z / float(grid.nz)};
+  const float inverseVoxelX = 1.f / voxelSize.x;
   tbb::parallel_for(uint64_t(0), cells, [&](uint64_t c) {
     const Box3f box = cellBounds(mesh, c);
     int x0, x1, y0, y1, z0, z1;
@@ -90,19 +115,16 @@ OccupancyGrid buildOccupancyGrid(const MeshView &mesh, float voxelsPerCell) {
     TetPlanes planes{};
     const bool tet = c < mesh.tetCount && planes.set(mesh, c);
     for (int z = z0; z <= z1; ++z)
-      for (int y = y0; y <= y1; ++y)
-        for (int x = x0; x <= x1; ++x) {
-          const Vec3f lower{grid.origin.x + float(x) * voxelSize.x, grid.origin.y + float(y) * voxelSize.y,
-                            grid.origin.z + float(z) * voxelSize.z};
-          if (tet && planes.excludes(lower, voxelSize))
-            continue;
-          const uint64_t voxel =
-              (uint64_t(z) * uint64_t(grid.ny) + uint64_t(y)) * uint64_t(grid.nx) + uint64_t(x);
-          std::atomic_ref<uint64_t> word(grid.bits[voxel >> 6]);
-          const uint64_t bit = uint64_t(1) << (voxel & 63);
-          if (!(word.load(std::memory_order_relaxed) & bit))
-            word.fetch_or(bit, std::memory_order_relaxed);
-        }
+      for (int y = y0; y <= y1; ++y) {
+        int first = x0, last = x1;
+        if (tet)
+          planes.clipRow(grid.origin.x, grid.origin.y + float(y) * voxelSize.y,
+                         grid.origin.z + float(z) * voxelSize.z, voxelSize, inverseVoxelX, first, last);
+        if (first > last)
+          continue;
+        const uint64_t row = (uint64_t(z) * uint64_t(grid.ny) + uint64_t(y)) * uint64_t(grid.nx);
+        setBits(grid.bits, row + uint64_t(first), row + uint64_t(last));
+      }
   });
   return grid;
 }
