@@ -98,8 +98,10 @@ struct CudaRenderer::Impl {
   cudaEvent_t kernelStart = nullptr, kernelEnd = nullptr; // around the render kernel
 
   ~Impl() {
-    cudaEventDestroy(kernelStart);
-    cudaEventDestroy(kernelEnd);
+    if (kernelStart)
+      cudaEventDestroy(kernelStart);
+    if (kernelEnd)
+      cudaEventDestroy(kernelEnd);
   }
 };
 
