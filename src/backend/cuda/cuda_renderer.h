@@ -29,8 +29,8 @@ public:
   /// Re-uploads the transfer-function table and the partition metadata of `scene`.
   void updateTransferFunction(const SceneView &scene, const SceneSizes &sizes);
 
-  /// Renders into `target`'s host buffers (width x height pixels); returns the milliseconds the kernel took on
-  /// the GPU, without the copies.
+  /// Renders into `target`'s host buffers (width x height pixels); returns the milliseconds the kernel took
+  /// on the GPU, without the copies.
   double render(const CameraView &camera, const IntegratorSettings &settings, const PixelTarget &target,
                 int height);
 
