@@ -44,8 +44,9 @@ struct OccupancyGrid {
 };
 
 /// About `voxelsPerCell` voxels per cell over the mesh bounds (a bit each), every voxel that a cell's
-/// bounding box touches set. The default, 16, made `full` frames 7-12% faster than 4 on the brain meshes (fewer
-/// samples near the surface left to a BVH query that finds nothing), for 1.5x the build time and 2 bytes per cell.
+/// bounding box touches set. The default, 16, made `full` frames 7-12% faster than 4 on the brain meshes
+/// (fewer samples near the surface left to a BVH query that finds nothing), for 1.5x the build time and 2
+/// bytes per cell.
 OccupancyGrid buildOccupancyGrid(const MeshView &mesh, float voxelsPerCell = 16.f);
 
 } // namespace uvr
