@@ -43,10 +43,10 @@ struct OccupancyGrid {
   size_t memoryBytes() const { return bits.size() * sizeof(uint64_t); }
 };
 
-/// About `voxelsPerCell` voxels per cell over the mesh bounds (a bit each), every voxel that a cell's
-/// bounding box touches set. The default, 16, made `full` frames 7-12% faster than 4 on the brain meshes
-/// (fewer samples near the surface left to a BVH query that finds nothing), for 1.5x the build time and 2
-/// bytes per cell.
+/// About `voxelsPerCell` voxels per cell over the mesh bounds (a bit each), set where a cell may reach (its
+/// box; for a tet, the part of its box its face planes do not exclude). The default, 16, made `full` frames
+/// 7-12% faster than 4 on the brain meshes (fewer samples near the surface left to a BVH query that finds
+/// nothing), for 2 bytes per cell and a longer build.
 OccupancyGrid buildOccupancyGrid(const MeshView &mesh, float voxelsPerCell = 16.f);
 
 } // namespace uvr
