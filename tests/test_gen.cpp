@@ -260,6 +260,13 @@ TEST(GenVolume, MalformedFilesAreErrors) {
   bad[344] = 'x';
   EXPECT_THROW(readNifti(writeFile("magic.nii", bad, false)), Error);
   EXPECT_THROW(readNifti("/nonexistent/volume.nii"), Error);
+  // A header that claims 2048³ float voxels over 24 bytes of data: an error once the data runs out, before
+  // any allocation of the claimed size (found by fuzz_nifti).
+  NiftiHeader huge;
+  huge.dims[0] = huge.dims[1] = huge.dims[2] = 2048;
+  huge.datatype = 16;
+  huge.bitpix = 32;
+  EXPECT_THROW(readNifti(writeFile("huge.nii", niftiBytes(huge, rampVoxels(24)), true)), Error);
 }
 
 TEST(GenTet, ConformingGradedPositive) {

@@ -79,13 +79,15 @@ template <typename T> T loadScalar(const uint8_t *p, bool swap) {
   return value;
 }
 
-template <typename T> void convertVoxels(const uint8_t *raw, bool swap, std::vector<float> &out) {
-  tbb::parallel_for(uint64_t(0), uint64_t(out.size()),
+template <typename T> void convertVoxels(const uint8_t *raw, uint64_t count, bool swap, float *out) {
+  tbb::parallel_for(uint64_t(0), count,
                     [&](uint64_t i) { out[i] = float(loadScalar<T>(raw + i * sizeof(T), swap)); });
 }
 
-/// Reads `count` voxels of NIfTI datatype `code` into floats.
-void readVoxels(VolumeFile &file, int code, bool swap, std::vector<float> &out, const std::string &path) {
+/// Reads `count` voxels of NIfTI datatype `code` into floats, a slab at a time: memory grows with the data
+/// the file holds, not with what its header claims (a gzipped file's length says nothing about its content).
+std::vector<float> readVoxels(VolumeFile &file, int code, bool swap, uint64_t count,
+                              const std::string &path) {
   int bytes = 0;
   switch (code) {
   case 2:   // uint8
@@ -110,34 +112,44 @@ void readVoxels(VolumeFile &file, int code, bool swap, std::vector<float> &out, 
         "expected datatype uint8, int8, int16, uint16, int32, uint32, float32 or float64, found code " +
             std::to_string(code));
   }
-  std::vector<uint8_t> raw(out.size() * uint64_t(bytes));
-  file.read(raw.data(), raw.size(), "voxel data");
-  switch (code) {
-  case 2:
-    convertVoxels<uint8_t>(raw.data(), swap, out);
-    break;
-  case 256:
-    convertVoxels<int8_t>(raw.data(), swap, out);
-    break;
-  case 4:
-    convertVoxels<int16_t>(raw.data(), swap, out);
-    break;
-  case 512:
-    convertVoxels<uint16_t>(raw.data(), swap, out);
-    break;
-  case 8:
-    convertVoxels<int32_t>(raw.data(), swap, out);
-    break;
-  case 16:
-    convertVoxels<float>(raw.data(), swap, out);
-    break;
-  case 768:
-    convertVoxels<uint32_t>(raw.data(), swap, out);
-    break;
-  case 64:
-    convertVoxels<double>(raw.data(), swap, out);
-    break;
+  constexpr uint64_t kSlabVoxels = uint64_t(1) << 24;
+  std::vector<float> out;
+  out.reserve(std::min(count, 4 * kSlabVoxels));
+  std::vector<uint8_t> raw(std::min(count, kSlabVoxels) * uint64_t(bytes));
+  for (uint64_t done = 0; done < count;) {
+    const uint64_t n = std::min(count - done, kSlabVoxels);
+    file.read(raw.data(), n * uint64_t(bytes), "voxel data");
+    out.resize(done + n);
+    float *slab = out.data() + done;
+    switch (code) {
+    case 2:
+      convertVoxels<uint8_t>(raw.data(), n, swap, slab);
+      break;
+    case 256:
+      convertVoxels<int8_t>(raw.data(), n, swap, slab);
+      break;
+    case 4:
+      convertVoxels<int16_t>(raw.data(), n, swap, slab);
+      break;
+    case 512:
+      convertVoxels<uint16_t>(raw.data(), n, swap, slab);
+      break;
+    case 8:
+      convertVoxels<int32_t>(raw.data(), n, swap, slab);
+      break;
+    case 16:
+      convertVoxels<float>(raw.data(), n, swap, slab);
+      break;
+    case 768:
+      convertVoxels<uint32_t>(raw.data(), n, swap, slab);
+      break;
+    case 64:
+      convertVoxels<double>(raw.data(), n, swap, slab);
+      break;
+    }
+    done += n;
   }
+  return out;
 }
 
 std::string stemOf(const std::string &path) {
@@ -248,8 +260,7 @@ Volume readNifti(const std::string &path) {
   if (!(voxOffset >= kHeaderSize) || voxOffset > float(1 << 30))
     throw Error(path, "byte 108", "expected vox_offset of at least 348");
   file.skip(uint64_t(voxOffset) - file.offset(), "header extensions");
-  volume.values.resize(volume.voxelCount());
-  readVoxels(file, i16(70), swap, volume.values, path);
+  volume.values = readVoxels(file, i16(70), swap, volume.voxelCount(), path);
 
   const float slope = f32(112), intercept = f32(116);
   if (slope != 0.f && std::isfinite(slope) && std::isfinite(intercept) && (slope != 1.f || intercept != 0.f))
@@ -272,13 +283,12 @@ Volume readRawVolume(const std::string &path, std::array<int64_t, 3> dims, Voxel
   }
   if (volume.voxelCount() > kMaxVoxels)
     throw Error(path, "", "volume too large");
-  volume.values.resize(volume.voxelCount());
   const int code = type == VoxelType::UInt8    ? 2
                    : type == VoxelType::Int16  ? 4
                    : type == VoxelType::UInt16 ? 512
                                                : 16;
   VolumeFile file(path);
-  readVoxels(file, code, false, volume.values, path);
+  volume.values = readVoxels(file, code, false, volume.voxelCount(), path);
   return volume;
 }
 
