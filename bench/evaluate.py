@@ -112,48 +112,37 @@ def write_montages(results, outdir, thumb):
                    os.path.join(outdir, r["heatmaps"]), thumb)
 
 
+def plot_sweep(plt, results, key, parameter, label, log2, path):
+    """Frame rate, samples and SSIM of `full` against one swept parameter, a line per case that sweeps it."""
+    swept = [r for r in results if len(r[key]) > 1]
+    if not swept:
+        return
+    figure, axes = plt.subplots(1, 3, figsize=(15, 4.2))
+    for r in swept:
+        xs = [p[parameter] for p in r[key]]
+        axes[0].plot(xs, [1000.0 / p["render_ms"] for p in r[key]], "o-", label=r["case"]["name"])
+        axes[1].plot(xs, [p["samples_per_pixel_mean"] for p in r[key]], "o-")
+        axes[2].plot(xs, [p["ssim"] for p in r[key]], "o-")
+    for axis, title in zip(axes, ["frames per second (full)", "samples per pixel (mean)", "SSIM against reference"]):
+        if log2:
+            axis.set_xscale("log", base=2)
+        axis.set_xlabel(label)
+        axis.set_title(title)
+        axis.grid(True, alpha=0.3)
+    axes[2].axhline(0.98, color="grey", linestyle="--", linewidth=0.8)
+    figure.legend(loc="lower center", ncol=4, fontsize=8)
+    figure.tight_layout(rect=(0, 0.12, 1, 1))
+    figure.savefig(path, dpi=80)
+    plt.close(figure)
+
+
 def write_plots(results, outdir):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    swept = [r for r in results if len(r["s2_sweep"]) > 1]
-    if swept:
-        figure, axes = plt.subplots(1, 3, figsize=(15, 4.2))
-        for r in swept:
-            factors = [p["factor"] for p in r["s2_sweep"]]
-            axes[0].plot(factors, [1000.0 / p["render_ms"] for p in r["s2_sweep"]], "o-", label=r["case"]["name"])
-            axes[1].plot(factors, [p["samples_per_pixel_mean"] for p in r["s2_sweep"]], "o-")
-            axes[2].plot(factors, [p["ssim"] for p in r["s2_sweep"]], "o-")
-        for axis, title in zip(axes, ["frames per second (full)", "samples per pixel (mean)",
-                                      "SSIM against reference"]):
-            axis.set_xscale("log", base=2)
-            axis.set_xlabel("s2 / s1")
-            axis.set_title(title)
-            axis.grid(True, alpha=0.3)
-        axes[2].axhline(0.98, color="grey", linestyle="--", linewidth=0.8)
-        figure.legend(loc="lower center", ncol=4, fontsize=8)
-        figure.tight_layout(rect=(0, 0.12, 1, 1))
-        figure.savefig(os.path.join(outdir, "sweep_s2.png"), dpi=80)
-        plt.close(figure)
-
-    swept = [r for r in results if len(r["p_sweep"]) > 1]
-    if swept:
-        figure, axes = plt.subplots(1, 3, figsize=(15, 4.2))
-        for r in swept:
-            ps = [p["p_value"] for p in r["p_sweep"]]
-            axes[0].plot(ps, [1000.0 / p["render_ms"] for p in r["p_sweep"]], "o-", label=r["case"]["name"])
-            axes[1].plot(ps, [p["samples_per_pixel_mean"] for p in r["p_sweep"]], "o-")
-            axes[2].plot(ps, [p["ssim"] for p in r["p_sweep"]], "o-")
-        for axis, title in zip(axes, ["frames per second (full)", "samples per pixel (mean)",
-                                      "SSIM against reference"]):
-            axis.set_xlabel("p")
-            axis.set_title(title)
-            axis.grid(True, alpha=0.3)
-        figure.legend(loc="lower center", ncol=4, fontsize=8)
-        figure.tight_layout(rect=(0, 0.12, 1, 1))
-        figure.savefig(os.path.join(outdir, "sweep_p.png"), dpi=80)
-        plt.close(figure)
+    plot_sweep(plt, results, "s2_sweep", "factor", "s2 / s1", True, os.path.join(outdir, "sweep_s2.png"))
+    plot_sweep(plt, results, "p_sweep", "p_value", "p", False, os.path.join(outdir, "sweep_p.png"))
 
     figure, axis = plt.subplots(figsize=(max(6, 1.3 * len(results)), 4.5))
     width = 0.27
@@ -251,12 +240,7 @@ def write_report(results, outdir, command, machine_before, machine_after, total_
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("uvr")
-    parser.add_argument("outdir")
-    parser.add_argument("--cases", default=os.path.join(ub.REPO, "bench", "cases.json"))
-    parser.add_argument("--data", default=os.path.join(ub.REPO, "..", "shared", "data"))
-    parser.add_argument("--quick", action="store_true", help="the small smoke-test cases of the cases file")
-    parser.add_argument("--only", nargs="+", help="only the cases whose name contains one of these")
+    ub.add_case_arguments(parser)
     parser.add_argument("--backend", help="override every case's backend")
     parser.add_argument("--size", help="override every case's image size, WxH")
     parser.add_argument("--frames", help="override every case's frame count")
@@ -266,9 +250,7 @@ def main():
     args = parser.parse_args()
 
     uvr = os.path.abspath(args.uvr)
-    cases = ub.load_cases(args.cases, None, args.quick)
-    if args.only:
-        cases = [c for c in cases if any(o in c["name"] for o in args.only)]
+    cases = ub.selected_cases(args, None)
     os.makedirs(args.outdir, exist_ok=True)
     command = "bench/evaluate.py " + " ".join(sys.argv[1:])
     before = ub.machine()

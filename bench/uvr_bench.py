@@ -24,6 +24,22 @@ def run(command):
     return result.stdout
 
 
+def add_case_arguments(parser):
+    """The arguments every driver takes: the uvr binary, the output folder and which cases to run."""
+    parser.add_argument("uvr")
+    parser.add_argument("outdir")
+    parser.add_argument("--cases", default=os.path.join(REPO, "bench", "cases.json"))
+    parser.add_argument("--data", default=os.path.join(REPO, "..", "shared", "data"))
+    parser.add_argument("--quick", action="store_true", help="the small smoke-test cases of the cases file")
+    parser.add_argument("--only", nargs="+", help="only the cases whose name contains one of these")
+
+
+def selected_cases(args, section):
+    """The cases of `section` that add_case_arguments' --quick and --only select."""
+    cases = load_cases(args.cases, section, args.quick)
+    return [c for c in cases if not args.only or any(o in c["name"] for o in args.only)]
+
+
 def load_cases(path, section, quick):
     """Cases of `section` (None: the top level) of the cases file, each merged over its defaults."""
     with open(path) as f:

@@ -244,12 +244,7 @@ def write_report(results, outdir, command, machine):
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("uvr")
-    parser.add_argument("outdir")
-    parser.add_argument("--cases", default=os.path.join(ub.REPO, "bench", "cases.json"))
-    parser.add_argument("--data", default=os.path.join(ub.REPO, "..", "shared", "data"))
-    parser.add_argument("--quick", action="store_true")
-    parser.add_argument("--only", nargs="+")
+    ub.add_case_arguments(parser)
     parser.add_argument("--keep-images", action="store_true", help="keep the full-size images in OUTDIR")
     parser.add_argument("--size", help="override every case's image size, WxH")
     parser.add_argument("--frames", type=int, help="override every case's VTK frame count")
@@ -257,9 +252,7 @@ def main():
     import vtk
 
     uvr = os.path.abspath(args.uvr)
-    cases = ub.load_cases(args.cases, "vtk", args.quick)
-    if args.only:
-        cases = [c for c in cases if any(o in c["name"] for o in args.only)]
+    cases = ub.selected_cases(args, "vtk")
     for case in cases:
         case.update({k: v for k, v in (("size", args.size), ("frames", args.frames)) if v})
     os.makedirs(args.outdir, exist_ok=True)
