@@ -47,9 +47,10 @@ struct TetPlanes {
       const float rest = offset[i] - n.y * nearY - n.z * nearZ; // the box is kept where n.x * nearX <= rest
       const float bound = (rest * inverseNormalX[i] - rowX) * inverseSizeX;
       const float lowest = float(first - 1), highest = float(last + 1); // keeps the casts below in range
-      if (n.x > 0.f)                                                    // nearX = rowX + x * size.x
+      // nearX is rowX + x * size.x where n.x > 0, rowX + (x + 1) * size.x where n.x < 0.
+      if (n.x > 0.f)
         last = std::min(last, int(std::floor(std::clamp(bound, lowest, highest))));
-      else if (n.x < 0.f) // nearX = rowX + (x + 1) * size.x
+      else if (n.x < 0.f)
         first = std::max(first, int(std::ceil(std::clamp(bound - 1.f, lowest, highest))));
       else if (rest < 0.f)
         last = first - 1;

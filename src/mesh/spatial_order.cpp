@@ -13,22 +13,21 @@ namespace {
 // A 30-bit Morton code (a 1024³ grid over the mesh bounds): fine enough to order a billion cells for
 // locality, and small enough to sit beside a 32-bit cell index in one 64-bit key.
 constexpr int kMortonBits = 10;
+constexpr float kMortonLast = float((1 << kMortonBits) - 1); // the last grid cell along an axis
 
 struct MortonQuantizer {
   Vec3f lower, scale;
 
   explicit MortonQuantizer(const Box3f &box) : lower(box.lower) {
     const Vec3f extent = box.upper - box.lower;
-    constexpr float kCells = float(1 << kMortonBits) - 1.f;
-    scale = {extent.x > 0.f ? kCells / extent.x : 0.f, extent.y > 0.f ? kCells / extent.y : 0.f,
-             extent.z > 0.f ? kCells / extent.z : 0.f};
+    scale = {extent.x > 0.f ? kMortonLast / extent.x : 0.f, extent.y > 0.f ? kMortonLast / extent.y : 0.f,
+             extent.z > 0.f ? kMortonLast / extent.z : 0.f};
   }
   uint32_t code(Vec3f p) const {
-    constexpr float kLast = float(1 << kMortonBits) - 1.f;
     const Vec3f d = p - lower;
-    return uint32_t(mortonCode(uint32_t(clampf(d.x * scale.x, 0.f, kLast)),
-                               uint32_t(clampf(d.y * scale.y, 0.f, kLast)),
-                               uint32_t(clampf(d.z * scale.z, 0.f, kLast))));
+    return uint32_t(mortonCode(uint32_t(clampf(d.x * scale.x, 0.f, kMortonLast)),
+                               uint32_t(clampf(d.y * scale.y, 0.f, kMortonLast)),
+                               uint32_t(clampf(d.z * scale.z, 0.f, kMortonLast))));
   }
 };
 
