@@ -117,14 +117,22 @@ UVR_HOST_DEVICE inline RayResult integrateRay(const SceneView &scene, const Inte
   uint32_t cell = hint;
   bool first = true;
   // Marches [ta, tb) with step `step`; false once the ray is opaque.
-  auto march = [&](float ta, float tb, float step) {
-    const float s1 = settings.s1;
-    float k = ceilf((ta - tEnter) / s1);
-    while (tEnter + k * s1 < ta) // the division can round down
+  const float s1 = settings.s1;
+  // The index of the first grid point at or after t.
+  auto gridIndex = [&](float t) {
+    float k = ceilf((t - tEnter) / s1);
+    while (tEnter + k * s1 < t) // the division can round down
       k += 1.f;
+    return k;
+  };
+  auto march = [&](float ta, float tb, float step) {
+    float k = gridIndex(ta);
+    // A sample stands for the distance to the next one. The last one before tb stands only for the distance
+    // to the grid point where the next interval's samples begin: a longer step must not count opacity twice
+    // across a partition boundary (with step s1 nothing changes).
+    const float kEnd = gridIndex(tb);
     const float stride = step / s1;
     const int walkSteps = 8 * int(ceilf(stride)); // a longer step crosses proportionally more tets
-    const float exponent = step / settings.unit;
     for (float t = tEnter + k * s1; t < tb; k += stride, t = tEnter + k * s1) {
       ++result.samples;
       float value;
@@ -137,7 +145,8 @@ UVR_HOST_DEVICE inline RayResult integrateRay(const SceneView &scene, const Inte
       const Vec4f c = scene.tf.sample(value);
       if (c.w <= 0.f)
         continue;
-      // Opacity per unit distance, corrected to this step (paper §2.4, DESIGN §5).
+      // Opacity per unit distance, corrected to the distance this sample stands for (paper §2.4, DESIGN §5).
+      const float exponent = minf(stride, kEnd - k) * s1 / settings.unit;
       const float alpha = 1.f - powf(maxf(1.f - c.w, 0.f), exponent);
       const float weight = (1.f - result.color.w) * alpha;
       result.color.x += weight * c.x;
