@@ -127,9 +127,9 @@ UVR_HOST_DEVICE inline RayResult integrateRay(const SceneView &scene, const Inte
   };
   auto march = [&](float ta, float tb, float step) {
     float k = gridIndex(ta);
-    // A sample stands for the distance to the next one. The last one before tb stands only for the distance
-    // to the grid point where the next interval's samples begin: a longer step must not count opacity twice
-    // across a partition boundary (with step s1 nothing changes).
+    // A sample stands for the distance to the next one; the last one before tb for the distance to the grid
+    // point where the next interval's samples begin, so that intervals marched with longer steps neither
+    // overlap nor leave gaps at partition boundaries (with step s1 nothing changes).
     const float kEnd = gridIndex(tb);
     const float stride = step / s1;
     const int walkSteps = 8 * int(ceilf(stride)); // a longer step crosses proportionally more tets
@@ -146,7 +146,8 @@ UVR_HOST_DEVICE inline RayResult integrateRay(const SceneView &scene, const Inte
       if (c.w <= 0.f)
         continue;
       // Opacity per unit distance, corrected to the distance this sample stands for (paper §2.4, DESIGN §5).
-      const float exponent = minf(stride, kEnd - k) * s1 / settings.unit;
+      const bool last = !(tEnter + (k + stride) * s1 < tb);
+      const float exponent = (last ? kEnd - k : stride) * s1 / settings.unit;
       const float alpha = 1.f - powf(maxf(1.f - c.w, 0.f), exponent);
       const float weight = (1.f - result.color.w) * alpha;
       result.color.x += weight * c.x;
