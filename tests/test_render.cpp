@@ -86,6 +86,30 @@ void expectSameFrame(const Frame &a, const Frame &b, float opacityTolerance, int
   EXPECT_LE(worstByte, byteTolerance);
 }
 
+/// Renders `settings` (never terminating early) with a transfer function of constant opacity `alphaPerUnit`
+/// over kBox, and checks each pixel's transmittance against exp(-kappa * length): samples stand for steps, so
+/// it may be off by one sample of length `step`, plus `slack`. Returns how many pixels' rays meet the box.
+int expectExponentialTransmittance(const Renderer &renderer, RenderSettings settings, float alphaPerUnit,
+                                   float step, float slack) {
+  settings.integrator.terminationOpacity = 2.f;
+  const Camera camera = obliqueCamera();
+  const Frame frame = renderer.render(camera, settings);
+  const CameraView view = makeCameraView(camera, settings.width, settings.height);
+  const float kappa = -std::log(1.f - alphaPerUnit) / settings.integrator.unit;
+  int inside = 0;
+  for (int y = 0; y < settings.height; ++y)
+    for (int x = 0; x < settings.width; ++x) {
+      const Ray ray = view.ray(x, y);
+      float t0, t1;
+      const float length = intersectBox(ray, kBox, 0.f, INFINITY, t0, t1) ? t1 - t0 : 0.f;
+      const float transmittance = 1.f - frame.opacity[size_t(y * settings.width + x)];
+      const float tolerance = std::exp(-kappa * std::max(length - step, 0.f)) - std::exp(-kappa * length);
+      EXPECT_NEAR(transmittance, std::exp(-kappa * length), tolerance + slack) << "pixel " << x << "," << y;
+      inside += length > 0.f;
+    }
+  return inside;
+}
+
 class Integrator : public testing::TestWithParam<Backend> {
 protected:
   void SetUp() override { gBackend = GetParam(); }
@@ -104,26 +128,9 @@ TEST_P(Integrator, ConstantFieldGivesExponentialTransmittance) {
   Renderer renderer(mesh, mesh.findField("f"), 64);
   const float alphaPerUnit = 0.3f;
   renderer.setTransferFunction(TransferFunction(constantMap(alphaPerUnit), 0.f, 1.f));
-  const Camera camera = obliqueCamera();
   for (RenderMode mode : {RenderMode::Reference, RenderMode::Skip, RenderMode::Full}) {
-    RenderSettings settings = settingsFor(mode, 0.01f, 0.04f);
-    settings.integrator.terminationOpacity = 2.f; // never terminate early
-    const Frame frame = renderer.render(camera, settings);
-    const CameraView view = makeCameraView(camera, settings.width, settings.height);
-    const float kappa = -std::log(1.f - alphaPerUnit) / settings.integrator.unit;
-    int inside = 0;
-    for (int y = 0; y < settings.height; ++y)
-      for (int x = 0; x < settings.width; ++x) {
-        const Ray ray = view.ray(x, y);
-        float t0, t1;
-        const float length = intersectBox(ray, kBox, 0.f, INFINITY, t0, t1) ? t1 - t0 : 0.f;
-        const float transmittance = 1.f - frame.opacity[size_t(y * settings.width + x)];
-        // Samples stand for steps of length s: the count may differ from length / s by one sample.
-        const float step = mode == RenderMode::Full ? 0.04f : 0.01f;
-        const float tolerance = std::exp(-kappa * std::max(length - step, 0.f)) - std::exp(-kappa * length);
-        EXPECT_NEAR(transmittance, std::exp(-kappa * length), tolerance + 1e-5f) << "pixel " << x << "," << y;
-        inside += length > 0.f;
-      }
+    const int inside = expectExponentialTransmittance(renderer, settingsFor(mode, 0.01f, 0.04f), alphaPerUnit,
+                                                      mode == RenderMode::Full ? 0.04f : 0.01f, 1e-5f);
     EXPECT_GT(inside, 64 * 64 / 4);
   }
 }
@@ -141,23 +148,8 @@ TEST_P(Integrator, AdaptiveStepsKeepTheTransmittance) {
   map.rgbPoints = {0.f, 1.f, 0.f, 0.f, 0.5f, 0.f, 1.f, 0.f, 1.f, 0.f, 0.f, 1.f};
   renderer.setTransferFunction(TransferFunction(map, 0.f, 1.f));
   const float s1 = 0.01f, s2 = 0.08f;
-  const Camera camera = obliqueCamera();
-  const CameraView view = makeCameraView(camera, 64, 64);
-  for (RenderMode mode : {RenderMode::Adaptive, RenderMode::Full}) {
-    RenderSettings settings = settingsFor(mode, s1, s2);
-    settings.integrator.terminationOpacity = 2.f; // never terminate early
-    const Frame frame = renderer.render(camera, settings);
-    const float kappa = -std::log(1.f - alphaPerUnit) / settings.integrator.unit;
-    for (int y = 0; y < settings.height; ++y)
-      for (int x = 0; x < settings.width; ++x) {
-        const Ray ray = view.ray(x, y);
-        float t0, t1;
-        const float length = intersectBox(ray, kBox, 0.f, INFINITY, t0, t1) ? t1 - t0 : 0.f;
-        const float transmittance = 1.f - frame.opacity[size_t(y * settings.width + x)];
-        const float tolerance = std::exp(-kappa * std::max(length - s2, 0.f)) - std::exp(-kappa * length);
-        EXPECT_NEAR(transmittance, std::exp(-kappa * length), tolerance + 1e-4f) << "pixel " << x << "," << y;
-      }
-  }
+  for (RenderMode mode : {RenderMode::Adaptive, RenderMode::Full})
+    expectExponentialTransmittance(renderer, settingsFor(mode, s1, s2), alphaPerUnit, s2, 1e-4f);
 }
 
 TEST_P(Integrator, SkippingChangesNoContributingSample) {
