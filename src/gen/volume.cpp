@@ -79,77 +79,51 @@ template <typename T> T loadScalar(const uint8_t *p, bool swap) {
   return value;
 }
 
-template <typename T> void convertVoxels(const uint8_t *raw, uint64_t count, bool swap, float *out) {
-  tbb::parallel_for(uint64_t(0), count,
-                    [&](uint64_t i) { out[i] = float(loadScalar<T>(raw + i * sizeof(T), swap)); });
+/// Reads `count` voxels of type T into floats, a slab at a time: memory grows with the data the file holds,
+/// not with what its header claims (a gzipped file's length says nothing about its content).
+template <typename T> std::vector<float> readVoxelsOf(VolumeFile &file, bool swap, uint64_t count) {
+  constexpr uint64_t kSlabVoxels = uint64_t(1) << 24;
+  std::vector<float> out;
+  out.reserve(std::min(count, 4 * kSlabVoxels));
+  std::vector<uint8_t> raw(std::min(count, kSlabVoxels) * sizeof(T));
+  for (uint64_t done = 0; done < count;) {
+    const uint64_t n = std::min(count - done, kSlabVoxels);
+    file.read(raw.data(), n * sizeof(T), "voxel data");
+    out.resize(done + n);
+    float *slab = out.data() + done;
+    tbb::parallel_for(uint64_t(0), n,
+                      [&](uint64_t i) { slab[i] = float(loadScalar<T>(raw.data() + i * sizeof(T), swap)); });
+    done += n;
+  }
+  return out;
 }
 
-/// Reads `count` voxels of NIfTI datatype `code` into floats, a slab at a time: memory grows with the data
-/// the file holds, not with what its header claims (a gzipped file's length says nothing about its content).
+/// Reads `count` voxels of NIfTI datatype `code` into floats.
 std::vector<float> readVoxels(VolumeFile &file, int code, bool swap, uint64_t count,
                               const std::string &path) {
-  int bytes = 0;
   switch (code) {
-  case 2:   // uint8
-  case 256: // int8
-    bytes = 1;
-    break;
-  case 4:   // int16
-  case 512: // uint16
-    bytes = 2;
-    break;
-  case 8:   // int32
-  case 16:  // float32
-  case 768: // uint32
-    bytes = 4;
-    break;
-  case 64: // float64
-    bytes = 8;
-    break;
+  case 2:
+    return readVoxelsOf<uint8_t>(file, swap, count);
+  case 256:
+    return readVoxelsOf<int8_t>(file, swap, count);
+  case 4:
+    return readVoxelsOf<int16_t>(file, swap, count);
+  case 512:
+    return readVoxelsOf<uint16_t>(file, swap, count);
+  case 8:
+    return readVoxelsOf<int32_t>(file, swap, count);
+  case 768:
+    return readVoxelsOf<uint32_t>(file, swap, count);
+  case 16:
+    return readVoxelsOf<float>(file, swap, count);
+  case 64:
+    return readVoxelsOf<double>(file, swap, count);
   default:
     throw Error(
         path, "byte 70",
         "expected datatype uint8, int8, int16, uint16, int32, uint32, float32 or float64, found code " +
             std::to_string(code));
   }
-  constexpr uint64_t kSlabVoxels = uint64_t(1) << 24;
-  std::vector<float> out;
-  out.reserve(std::min(count, 4 * kSlabVoxels));
-  std::vector<uint8_t> raw(std::min(count, kSlabVoxels) * uint64_t(bytes));
-  for (uint64_t done = 0; done < count;) {
-    const uint64_t n = std::min(count - done, kSlabVoxels);
-    file.read(raw.data(), n * uint64_t(bytes), "voxel data");
-    out.resize(done + n);
-    float *slab = out.data() + done;
-    switch (code) {
-    case 2:
-      convertVoxels<uint8_t>(raw.data(), n, swap, slab);
-      break;
-    case 256:
-      convertVoxels<int8_t>(raw.data(), n, swap, slab);
-      break;
-    case 4:
-      convertVoxels<int16_t>(raw.data(), n, swap, slab);
-      break;
-    case 512:
-      convertVoxels<uint16_t>(raw.data(), n, swap, slab);
-      break;
-    case 8:
-      convertVoxels<int32_t>(raw.data(), n, swap, slab);
-      break;
-    case 16:
-      convertVoxels<float>(raw.data(), n, swap, slab);
-      break;
-    case 768:
-      convertVoxels<uint32_t>(raw.data(), n, swap, slab);
-      break;
-    case 64:
-      convertVoxels<double>(raw.data(), n, swap, slab);
-      break;
-    }
-    done += n;
-  }
-  return out;
 }
 
 std::string stemOf(const std::string &path) {
