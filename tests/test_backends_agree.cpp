@@ -57,3 +57,40 @@ TEST(BackendsAgree, CudaRendersTheCpuImage) {
     }
   }
 }
+
+TEST(BackendsAgree, CudaComputesTheHostsPartitionMetadata) {
+  const Mesh mesh =
+      buildMesh(makeBoxGrid(
+                    CellType::Tetra, 12, {{-1.f, -1.f, -1.f}, {1.f, 1.f, 1.f}},
+                    [](Vec3f p) { return 0.5f + 0.45f * std::sin(2.f * p.x + p.z) * p.y; }, 0.2f),
+                "box");
+  Renderer renderer(mesh, mesh.findField("f"), 8);
+  if (!haveCudaDevice(renderer))
+    GTEST_SKIP() << "no CUDA GPU here; scripts/gpu-check runs this where there is one";
+  ColorMap map;
+  map.rgbPoints = {0.f, 0.f, 0.f, 1.f, 0.5f, 0.f, 1.f, 0.f, 1.f, 1.f, 0.f, 0.f};
+  // An opaque band in the middle of the range, then one at the top: some subtrees fully transparent, others
+  // with partitions of every opacity below them.
+  for (const std::vector<float> &opacity :
+       {std::vector<float>{0.f, 0.f, 0.5f, 0.f, 0.4f, 0.f, 0.5f, 0.f, 0.5f, 0.8f, 0.5f, 0.f, 0.6f, 0.f, 0.5f,
+                           0.f},
+        std::vector<float>{0.f, 0.f, 0.5f, 0.f, 0.9f, 0.f, 0.5f, 0.f, 1.f, 1.f, 0.5f, 0.f}}) {
+    map.opacityPoints = opacity;
+    const TransferFunction tf(map, 0.f, 1.f);
+    renderer.setTransferFunction(tf);
+    const PartitionMetadata host = computePartitionMetadata(renderer.partitions(), tf);
+    const PartitionMetadata device = renderer.deviceMetadata();
+    ASSERT_GT(host.transparentCount, 0u);
+    ASSERT_LT(host.transparentCount, renderer.partitions().count());
+    EXPECT_EQ(device.transparentCount, host.transparentCount);
+    EXPECT_EQ(renderer.transparentPartitions(), host.transparentCount);
+    ASSERT_EQ(device.maxOpacity.size(), host.maxOpacity.size());
+    ASSERT_EQ(device.nodeMaxOpacity.size(), host.nodeMaxOpacity.size());
+    for (size_t i = 0; i < host.maxOpacity.size(); ++i) {
+      EXPECT_EQ(device.maxOpacity[i], host.maxOpacity[i]) << "partition " << i;
+      EXPECT_NEAR(device.sigma[i], host.sigma[i], 1e-5f) << "partition " << i;
+    }
+    for (size_t i = 0; i < host.nodeMaxOpacity.size(); ++i)
+      EXPECT_EQ(device.nodeMaxOpacity[i], host.nodeMaxOpacity[i]) << "node " << i;
+  }
+}

@@ -43,11 +43,13 @@ void runRender(const RenderCommandOptions &o) {
   settings.integrator = chooseSampling(o.view, mesh);
 
   Renderer renderer(mesh, loaded.fieldIndex, o.view.leafSize);
+  // The scene goes to the GPU first, outside the frame times, so that the transfer function's update is
+  // timed where the frames use it.
+  renderer.prepare(settings.backend);
   const ValueRange range = transferRange(o.view, mesh.fields[size_t(loaded.fieldIndex)]);
   renderer.setTransferFunction(
       TransferFunction(chooseColorMap(o.view.tf, o.view.tfName), range.min, range.max));
   const Camera camera = chooseCamera(o.view, mesh);
-  renderer.prepare(settings.backend); // uploads the scene for CUDA, outside the frame times
 
   std::vector<double> times, kernelTimes;
   Frame frame;

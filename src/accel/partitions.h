@@ -24,7 +24,9 @@ struct PartitionsView {
   const KdNode *nodes = nullptr;
   const Box3f *nodeBounds = nullptr; ///< per node, the union of the shrunk boxes of the partitions below
   const Box3f *bounds = nullptr;     ///< shrunk box per partition
-  Box3f rootBounds;                  ///< the mesh bounds, slightly padded: the KD-tree's root cell
+  const float *valueMin = nullptr;   ///< scalar range per partition, for the transfer-function metadata
+  const float *valueMax = nullptr;
+  Box3f rootBounds; ///< the mesh bounds, slightly padded: the KD-tree's root cell
   uint32_t count = 0;
 };
 
@@ -38,7 +40,8 @@ struct Partitions {
 
   uint32_t count() const { return uint32_t(bounds.size()); }
   PartitionsView view() const {
-    return {nodes.data(), nodeBounds.data(), bounds.data(), rootBounds, count()};
+    return {nodes.data(),    nodeBounds.data(), bounds.data(), valueMin.data(),
+            valueMax.data(), rootBounds,        count()};
   }
 };
 

@@ -63,7 +63,7 @@ nlohmann::json frameStats(const Mesh &mesh, const Renderer &renderer, const Rend
       {"height", settings.height},
       {"cells", mesh.cellCount()},
       {"partitions", renderer.partitions().count()},
-      {"partitions_skipped", skipping ? renderer.metadata().transparentCount : 0},
+      {"partitions_skipped", skipping ? renderer.transparentPartitions() : 0},
       {"samples_total", frame.samplesTotal},
       {"samples_per_pixel_mean", double(frame.samplesTotal) / pixels},
       {"samples_per_pixel_max", frame.samplesMax},

@@ -60,12 +60,22 @@ Renderer::Renderer(const Mesh &mesh, int fieldIndex, uint32_t leafSize) : mesh_(
 void Renderer::setTransferFunction(TransferFunction tf) {
   const Timer timer;
   tf_.emplace(std::move(tf));
-  metadata_ = computePartitionMetadata(partitions_, *tf_);
+  metadataCurrent_ = false;
 #ifdef UVR_HAVE_CUDA
   if (cuda_)
-    cuda_->updateTransferFunction(sceneView(), sceneSizes());
+    transparentPartitions_ = cuda_->setTransferFunction(*tf_);
+  else
 #endif
+    transparentPartitions_ = metadata().transparentCount;
   tfUpdateMs_ = timer.milliseconds();
+}
+
+const PartitionMetadata &Renderer::metadata() const {
+  if (!metadataCurrent_) {
+    metadata_ = computePartitionMetadata(partitions_, transferFunction());
+    metadataCurrent_ = true;
+  }
+  return metadata_;
 }
 
 const TransferFunction &Renderer::transferFunction() const {
@@ -75,16 +85,22 @@ const TransferFunction &Renderer::transferFunction() const {
 }
 
 SceneView Renderer::sceneView() const {
+  SceneView scene = geometryView();
+  const PartitionMetadata &meta = metadata();
+  scene.maxOpacity = meta.maxOpacity.data();
+  scene.nodeMaxOpacity = meta.nodeMaxOpacity.data();
+  scene.sigma = meta.sigma.data();
+  scene.tf = tf_->view();
+  return scene;
+}
+
+SceneView Renderer::geometryView() const {
   SceneView scene;
   scene.mesh = meshView_;
   scene.bvh = bvh_.view();
   scene.occupancy = occupancy_.view();
   scene.tetNeighbors = tetNeighbors_.empty() ? nullptr : tetNeighbors_.data();
   scene.partitions = partitions_.view();
-  scene.maxOpacity = metadata_.maxOpacity.data();
-  scene.nodeMaxOpacity = metadata_.nodeMaxOpacity.data();
-  scene.sigma = metadata_.sigma.data();
-  scene.tf = tf_->view();
   return scene;
 }
 
@@ -103,15 +119,15 @@ void Renderer::prepare(Backend backend) const {
   if (backend != Backend::Cuda || cuda_)
     return;
 #ifdef UVR_HAVE_CUDA
-  if (!tf_)
-    throw Error("no transfer function set");
   // Leaves of up to 8 cells: a fraction of the nodes, and so of the GPU memory, for a few more cell tests.
   const Bvh deviceBvh = collapseBvh(bvh_, 8);
-  SceneView scene = sceneView();
+  SceneView scene = geometryView();
   scene.bvh = deviceBvh.view();
   SceneSizes sizes = sceneSizes();
   sizes.bvhNodes = deviceBvh.nodes.size();
   cuda_ = std::make_shared<CudaRenderer>(scene, sizes);
+  if (tf_)
+    cuda_->setTransferFunction(*tf_);
 #else
   throw Error("this uvr was built without CUDA: use --backend cpu");
 #endif
@@ -121,10 +137,12 @@ void Renderer::prepare(Backend backend) const {
 std::string Renderer::deviceName() const { return cuda_ ? std::string(cuda_->deviceName()) : std::string(); }
 size_t Renderer::deviceMemoryBytes() const { return cuda_ ? cuda_->memoryBytes() : 0; }
 size_t Renderer::deviceSceneBytes() const { return cuda_ ? cuda_->sceneBytes() : 0; }
+PartitionMetadata Renderer::deviceMetadata() const { return cuda_ ? cuda_->metadata() : PartitionMetadata{}; }
 #else
 std::string Renderer::deviceName() const { return {}; }
 size_t Renderer::deviceMemoryBytes() const { return 0; }
 size_t Renderer::deviceSceneBytes() const { return 0; }
+PartitionMetadata Renderer::deviceMetadata() const { return {}; }
 #endif
 
 Frame Renderer::render(const Camera &camera, const RenderSettings &settings) const {

@@ -55,11 +55,13 @@ public:
   /// outlive the renderer.
   Renderer(const Mesh &mesh, int fieldIndex, uint32_t leafSize = kDefaultLeafSize);
 
-  /// Replaces the transfer function and recomputes the partitions' metadata; the mesh is not touched.
+  /// Replaces the transfer function and recomputes the partitions' metadata, on the GPU once CUDA has been
+  /// prepared, else on the host; the mesh is not touched.
   void setTransferFunction(TransferFunction tf);
 
-  /// Sets up `backend` ahead of the first frame (for CUDA: uploads the scene), so that frame times exclude
-  /// it.
+  /// Sets up `backend` ahead of the first frame (for CUDA: uploads the scene, and the transfer function if
+  /// one is set), so that frame times exclude it. Preparing before setTransferFunction times the GPU's
+  /// update.
   void prepare(Backend backend) const;
 
   Frame render(const Camera &camera, const RenderSettings &settings) const;
@@ -71,14 +73,20 @@ public:
 
   const Partitions &partitions() const { return partitions_; }
   const Bvh &bvh() const { return bvh_; }
-  const PartitionMetadata &metadata() const { return metadata_; }
+  /// The metadata on the host: after an update on the GPU, computed there on first use.
+  const PartitionMetadata &metadata() const;
+  /// The metadata the GPU computed, copied back; empty until CUDA has been prepared.
+  PartitionMetadata deviceMetadata() const;
+  /// Partitions the current transfer function makes fully transparent (skipped by the skipping modes).
+  uint32_t transparentPartitions() const { return transparentPartitions_; }
   /// The current transfer function; throws uvr::Error before the first setTransferFunction.
   const TransferFunction &transferFunction() const;
   double buildMs() const { return buildMs_; }
   double tfUpdateMs() const { return tfUpdateMs_; }
 
 private:
-  SceneView sceneView() const;
+  SceneView sceneView() const;    ///< all a ray reads on the host; needs the transfer function
+  SceneView geometryView() const; ///< the part that does not depend on the transfer function
   SceneSizes sceneSizes() const;
 
   const Mesh &mesh_;
@@ -88,7 +96,9 @@ private:
   std::vector<uint32_t> tetNeighbors_;
   Partitions partitions_;
   std::optional<TransferFunction> tf_;
-  PartitionMetadata metadata_;
+  mutable PartitionMetadata metadata_;
+  mutable bool metadataCurrent_ = false; // false after an update that only the GPU made
+  uint32_t transparentPartitions_ = 0;
   double buildMs_ = 0.0;
   double tfUpdateMs_ = 0.0;
   mutable std::shared_ptr<CudaRenderer> cuda_; // created on first use of the CUDA backend

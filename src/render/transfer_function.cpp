@@ -25,15 +25,17 @@ TransferFunction::TransferFunction(const ColorMap &map, float valueMin, float va
       prefixSquares_[4 * (i + 1) + size_t(k)] = prefixSquares_[4 * i + size_t(k)] + channel[k] * channel[k];
     }
   }
-  opacityMax_.emplace_back(n);
+  // Level k holds the maximum over 2^k entries from each position; positions past n - 2^k stay zero.
+  const size_t levels = size_t(std::bit_width(n));
+  opacityMax_.assign(levels * n, 0.f);
   for (size_t i = 0; i < n; ++i)
-    opacityMax_[0][i] = table_[i].w;
-  for (size_t span = 2; span <= n; span *= 2) {
-    const std::vector<float> &previous = opacityMax_.back();
-    std::vector<float> level(n - span + 1);
-    for (size_t i = 0; i < level.size(); ++i)
-      level[i] = std::max(previous[i], previous[i + span / 2]);
-    opacityMax_.push_back(std::move(level));
+    opacityMax_[i] = table_[i].w;
+  for (size_t k = 1; k < levels; ++k) {
+    const float *previous = opacityMax_.data() + (k - 1) * n;
+    float *level = opacityMax_.data() + k * n;
+    const size_t half = size_t(1) << (k - 1);
+    for (size_t i = 0; i + 2 * half <= n; ++i)
+      level[i] = std::max(previous[i], previous[i + half]);
   }
 }
 
@@ -43,37 +45,8 @@ TransferFunctionView TransferFunction::view() const {
   return {table_.data(), int(table_.size()), valueMin_, scale};
 }
 
-void TransferFunction::entryRange(float a, float b, int &first, int &last) const {
-  const TransferFunctionView v = view();
-  const float lastEntry = float(v.size - 1);
-  first = int(std::floor(std::clamp((a - v.valueMin) * v.scale, 0.f, lastEntry)));
-  last = int(std::ceil(std::clamp((b - v.valueMin) * v.scale, 0.f, lastEntry)));
-}
-
-float TransferFunction::maxOpacity(float a, float b) const {
-  if (!(a <= b))
-    return 0.f; // no finite value in the range
-  int first, last;
-  entryRange(a, b, first, last);
-  const auto count = unsigned(last - first + 1);
-  const int level = std::bit_width(count) - 1; // two overlapping runs of 2^level entries cover [first, last]
-  const std::vector<float> &maxima = opacityMax_[size_t(level)];
-  return std::max(maxima[size_t(first)], maxima[size_t(last + 1 - (1 << level))]);
-}
-
-float TransferFunction::colorVariance(float a, float b) const {
-  if (!(a <= b))
-    return 0.f;
-  int first, last;
-  entryRange(a, b, first, last);
-  const double n = double(last - first + 1);
-  double variance = 0.0;
-  for (size_t k = 0; k < 4; ++k) {
-    const double sum = prefixSum_[4 * size_t(last + 1) + k] - prefixSum_[4 * size_t(first) + k];
-    const double squares = prefixSquares_[4 * size_t(last + 1) + k] - prefixSquares_[4 * size_t(first) + k];
-    variance += std::max(0.0, squares / n - (sum / n) * (sum / n));
-  }
-  return float(variance);
+TransferFunctionRangeView TransferFunction::rangeView() const {
+  return {view(), prefixSum_.data(), prefixSquares_.data(), opacityMax_.data()};
 }
 
 PartitionMetadata computePartitionMetadata(const Partitions &partitions, const TransferFunction &tf) {
@@ -82,9 +55,10 @@ PartitionMetadata computePartitionMetadata(const Partitions &partitions, const T
   meta.maxOpacity.resize(count);
   meta.sigma.resize(count);
   std::vector<float> variance(count);
+  const TransferFunctionRangeView ranges = tf.rangeView();
   tbb::parallel_for(uint32_t(0), count, [&](uint32_t i) {
-    meta.maxOpacity[i] = tf.maxOpacity(partitions.valueMin[i], partitions.valueMax[i]);
-    variance[i] = tf.colorVariance(partitions.valueMin[i], partitions.valueMax[i]);
+    meta.maxOpacity[i] = ranges.maxOpacity(partitions.valueMin[i], partitions.valueMax[i]);
+    variance[i] = ranges.colorVariance(partitions.valueMin[i], partitions.valueMax[i]);
   });
 
   // Normalise by the extremes over the partitions that are drawn at all (paper §2.1).
@@ -105,9 +79,8 @@ PartitionMetadata computePartitionMetadata(const Partitions &partitions, const T
                                 : std::max(meta.nodeMaxOpacity[n.child], meta.nodeMaxOpacity[n.child + 1]);
   }
 
-  const float span = highest - lowest;
   for (uint32_t i = 0; i < count; ++i)
-    meta.sigma[i] = span > 0.f ? std::sqrt(std::clamp((variance[i] - lowest) / span, 0.f, 1.f)) : 1.f;
+    meta.sigma[i] = normalizedSigma(variance[i], lowest, highest);
   return meta;
 }
 

@@ -29,6 +29,58 @@ struct TransferFunctionView {
   }
 };
 
+/// Constant-time summaries of a transfer function's table over a scalar range, from prefix sums and a sparse
+/// table of opacity maxima; the partitions' metadata is built from them on the host and on the GPU alike.
+struct TransferFunctionRangeView {
+  TransferFunctionView function;
+  const double *prefixSum = nullptr;     ///< 4 per entry plus 4 leading zeros: running sums of r, g, b, a
+  const double *prefixSquares = nullptr; ///< likewise, of their squares
+  const float *opacityMax = nullptr; ///< level k (at k * size) holds the maximum over entries [i, i + 2^k)
+
+  /// Highest opacity the function takes over [a, b]; never below the true maximum; 0 for an empty range.
+  UVR_HOST_DEVICE float maxOpacity(float a, float b) const {
+    if (!(a <= b))
+      return 0.f; // no finite value in the range
+    int first, last;
+    entryRange(a, b, first, last);
+    const int level = floorLog2(unsigned(last - first + 1)); // two runs of 2^level entries cover the range
+    const float *maxima = opacityMax + size_t(level) * size_t(function.size);
+    return maxf(maxima[first], maxima[last + 1 - (1 << level)]);
+  }
+
+  /// Variance of colour and opacity (summed over r, g, b, a) over [a, b].
+  UVR_HOST_DEVICE float colorVariance(float a, float b) const {
+    if (!(a <= b))
+      return 0.f;
+    int first, last;
+    entryRange(a, b, first, last);
+    const double n = double(last - first + 1);
+    double variance = 0.0;
+    for (int k = 0; k < 4; ++k) {
+      const double sum = prefixSum[4 * (last + 1) + k] - prefixSum[4 * first + k];
+      const double squares = prefixSquares[4 * (last + 1) + k] - prefixSquares[4 * first + k];
+      const double v = squares / n - (sum / n) * (sum / n);
+      variance += v > 0.0 ? v : 0.0;
+    }
+    return float(variance);
+  }
+
+private:
+  UVR_HOST_DEVICE static int floorLog2(unsigned n) {
+#if defined(__CUDA_ARCH__)
+    return 31 - __clz(int(n));
+#else
+    return 31 - __builtin_clz(n);
+#endif
+  }
+  /// The table entries whose linear pieces reach into [a, b].
+  UVR_HOST_DEVICE void entryRange(float a, float b, int &first, int &last) const {
+    const float lastEntry = float(function.size - 1);
+    first = int(floorf(clampf((a - function.valueMin) * function.scale, 0.f, lastEntry)));
+    last = int(ceilf(clampf((b - function.valueMin) * function.scale, 0.f, lastEntry)));
+  }
+};
+
 /// A colour map stretched over [valueMin, valueMax] and sampled into a table.
 class TransferFunction {
 public:
@@ -37,24 +89,22 @@ public:
   TransferFunction(const ColorMap &map, float valueMin, float valueMax, int tableSize = kDefaultTableSize);
 
   TransferFunctionView view() const;
+  TransferFunctionRangeView rangeView() const;
   float valueMin() const { return valueMin_; }
   float valueMax() const { return valueMax_; }
   const std::vector<Vec4f> &table() const { return table_; }
+  const std::vector<double> &prefixSums() const { return prefixSum_; }
+  const std::vector<double> &prefixSquares() const { return prefixSquares_; }
+  const std::vector<float> &opacityMaxima() const { return opacityMax_; }
 
-  /// Highest opacity the function takes over [a, b]; never below the true maximum. Constant time.
-  float maxOpacity(float a, float b) const;
-  /// Variance of colour and opacity (summed over r, g, b, a) over [a, b]. Constant time.
-  float colorVariance(float a, float b) const;
+  float maxOpacity(float a, float b) const { return rangeView().maxOpacity(a, b); }
+  float colorVariance(float a, float b) const { return rangeView().colorVariance(a, b); }
 
 private:
-  void entryRange(float a, float b, int &first, int &last) const;
-
   std::vector<Vec4f> table_;
   float valueMin_, valueMax_;
-  // Prefix sums of each channel and its square, and a sparse table of opacity maxima (level k holds the
-  // maximum over 2^k entries), so that a partition's metadata costs O(1) whatever its range.
-  std::vector<double> prefixSum_, prefixSquares_; ///< 4 per entry, entry 0 = 0
-  std::vector<std::vector<float>> opacityMax_;
+  std::vector<double> prefixSum_, prefixSquares_; ///< see TransferFunctionRangeView
+  std::vector<float> opacityMax_;                 ///< levels of size() entries each, unused tails zero
 };
 
 /// What space skipping and adaptive sampling read per partition; recomputed on every transfer-function change
@@ -66,7 +116,15 @@ struct PartitionMetadata {
   uint32_t transparentCount = 0;
 };
 
+/// On the host, with all cores; the CUDA backend computes the same on the GPU.
 PartitionMetadata computePartitionMetadata(const Partitions &partitions, const TransferFunction &tf);
+
+/// A partition's colour deviation normalised by the extremes of the variances over the partitions drawn
+/// (paper §2.1): 1 when they are all alike, so that adaptive sampling then takes the finest step.
+UVR_HOST_DEVICE inline float normalizedSigma(float variance, float lowest, float highest) {
+  const float span = highest - lowest;
+  return span > 0.f ? sqrtf(clampf((variance - lowest) / span, 0.f, 1.f)) : 1.f;
+}
 
 /// The paper's step size for a partition of normalised deviation `sigma` (§2.4).
 UVR_HOST_DEVICE inline float adaptiveStepSize(float s1, float s2, float p, float sigma) {

@@ -2,6 +2,7 @@
 
 #include "core/error.h"
 
+#include <cub/block/block_reduce.cuh>
 #include <cuda_runtime.h>
 
 #include <string>
@@ -79,6 +80,83 @@ __global__ void renderKernel(SceneView scene, IntegratorSettings settings, Camer
   target.store(x, y, integrateRay(scene, settings, camera.ray(x, y), hint));
 }
 
+/// Links each KD node to its parent and each partition to its leaf node, for the metadata kernel's walk up.
+__global__ void linkNodesKernel(const KdNode *nodes, uint32_t nodeCount, uint32_t *parents,
+                                uint32_t *partitionNodes) {
+  const uint32_t node = blockIdx.x * blockDim.x + threadIdx.x;
+  if (node >= nodeCount)
+    return;
+  const KdNode n = nodes[node];
+  if (n.axis == KdNode::kLeaf) {
+    partitionNodes[n.child] = node;
+  } else {
+    parents[n.child] = node;
+    parents[n.child + 1] = node;
+  }
+}
+
+/// What the partitions' metadata is normalised by, reduced over all partitions. Non-negative floats order
+/// as their bit patterns, which lets integer atomics take their minimum and maximum.
+struct MetadataTotals {
+  uint32_t lowestVariance;  ///< bits of the smallest variance over the partitions drawn
+  uint32_t highestVariance; ///< bits of the largest
+  uint32_t transparent;     ///< partitions the transfer function makes fully transparent
+};
+constexpr MetadataTotals kEmptyTotals{0x7f800000u /* +inf */, 0u, 0u};
+constexpr int kMetadataBlock = 256;
+
+/// Per partition, as computePartitionMetadata on the host: the maximum opacity, the colour variance (into
+/// `variance`, normalised by normalizeSigmaKernel) and the KD nodes' maxima (zeroed beforehand).
+__global__ void partitionMetadataKernel(TransferFunctionRangeView tf, PartitionsView parts,
+                                        const uint32_t *parents, const uint32_t *partitionNodes,
+                                        float *maxOpacity, float *variance, float *nodeMaxOpacity,
+                                        MetadataTotals *totals) {
+  const uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
+  bool drawn = false;
+  float v = 0.f;
+  if (i < parts.count) {
+    const float opacity = maxf(tf.maxOpacity(parts.valueMin[i], parts.valueMax[i]), 0.f);
+    v = tf.colorVariance(parts.valueMin[i], parts.valueMax[i]);
+    maxOpacity[i] = opacity;
+    variance[i] = v;
+    drawn = opacity > 0.f;
+    // Raise the nodes above to this maximum; stop at one that holds as much already: whoever raised it
+    // carries that value on to the root.
+    uint32_t node = partitionNodes[i];
+    nodeMaxOpacity[node] = opacity;
+    const uint32_t bits = __float_as_uint(opacity);
+    while (drawn && node != 0) {
+      node = parents[node];
+      if (atomicMax(reinterpret_cast<uint32_t *>(nodeMaxOpacity + node), bits) >= bits)
+        break;
+    }
+  }
+  using Reduce = cub::BlockReduce<uint32_t, kMetadataBlock>;
+  __shared__ typename Reduce::TempStorage storage;
+  const uint32_t varianceBits = __float_as_uint(v);
+  const uint32_t lowest = Reduce(storage).Reduce(drawn ? varianceBits : kEmptyTotals.lowestVariance,
+                                                 [](uint32_t a, uint32_t b) { return a < b ? a : b; });
+  __syncthreads();
+  const uint32_t highest =
+      Reduce(storage).Reduce(drawn ? varianceBits : 0u, [](uint32_t a, uint32_t b) { return a > b ? a : b; });
+  __syncthreads();
+  const uint32_t transparent = Reduce(storage).Sum(i < parts.count && !drawn ? 1u : 0u);
+  if (threadIdx.x == 0) {
+    atomicMin(&totals->lowestVariance, lowest);
+    atomicMax(&totals->highestVariance, highest);
+    atomicAdd(&totals->transparent, transparent);
+  }
+}
+
+__global__ void normalizeSigmaKernel(uint32_t count, const MetadataTotals *totals, float *sigma) {
+  const uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
+  if (i < count)
+    sigma[i] = normalizedSigma(sigma[i], __uint_as_float(totals->lowestVariance),
+                               __uint_as_float(totals->highestVariance));
+}
+
+unsigned blocksFor(uint64_t threads, int block) { return unsigned((threads + uint64_t(block) - 1) / block); }
+
 } // namespace
 
 struct CudaRenderer::Impl {
@@ -86,7 +164,11 @@ struct CudaRenderer::Impl {
   SceneView scene; // device pointers
   DeviceBuffer<Vec3f> points;
   DeviceBuffer<uint32_t> tets, pyramids, wedges, hexes, tetNeighbors, bvhCellIds;
-  DeviceBuffer<float> values, maxOpacity, nodeMaxOpacity, sigma;
+  DeviceBuffer<float> values, maxOpacity, nodeMaxOpacity, sigma, valueMin, valueMax;
+  DeviceBuffer<uint32_t> kdParents, partitionNodes;
+  DeviceBuffer<MetadataTotals> totals;
+  DeviceBuffer<double> tfPrefixSum, tfPrefixSquares;
+  DeviceBuffer<float> tfOpacityMax;
   DeviceBuffer<BvhNode> bvhNodes;
   DeviceBuffer<KdNode> kdNodes;
   DeviceBuffer<Box3f> nodeBounds, partitionBounds;
@@ -135,19 +217,64 @@ CudaRenderer::CudaRenderer(const SceneView &host, const SceneSizes &sizes) : imp
       host.occupancy.bits ? d.occupancy.upload(host.occupancy.bits, sizes.occupancyWords) : nullptr;
   scene.partitions.nodes = d.kdNodes.upload(host.partitions.nodes, sizes.partitionNodes);
   scene.partitions.nodeBounds = d.nodeBounds.upload(host.partitions.nodeBounds, sizes.partitionNodes);
-  scene.partitions.bounds = d.partitionBounds.upload(host.partitions.bounds, host.partitions.count);
-  updateTransferFunction(host, sizes);
+  const uint32_t partitionCount = host.partitions.count;
+  scene.partitions.bounds = d.partitionBounds.upload(host.partitions.bounds, partitionCount);
+  scene.partitions.valueMin = d.valueMin.upload(host.partitions.valueMin, partitionCount);
+  scene.partitions.valueMax = d.valueMax.upload(host.partitions.valueMax, partitionCount);
+  d.kdParents.resize(sizes.partitionNodes);
+  d.partitionNodes.resize(partitionCount);
+  linkNodesKernel<<<blocksFor(sizes.partitionNodes, kMetadataBlock), kMetadataBlock>>>(
+      scene.partitions.nodes, uint32_t(sizes.partitionNodes), d.kdParents.data(), d.partitionNodes.data());
+  UVR_CUDA_CHECK(cudaGetLastError());
+  d.maxOpacity.resize(partitionCount);
+  d.sigma.resize(partitionCount);
+  d.nodeMaxOpacity.resize(sizes.partitionNodes);
+  d.totals.resize(1);
+  scene.maxOpacity = d.maxOpacity.data();
+  scene.sigma = d.sigma.data();
+  scene.nodeMaxOpacity = d.nodeMaxOpacity.data();
+  UVR_CUDA_CHECK(cudaDeviceSynchronize());
 }
 
 CudaRenderer::~CudaRenderer() = default;
 
-void CudaRenderer::updateTransferFunction(const SceneView &host, const SceneSizes &sizes) {
+uint32_t CudaRenderer::setTransferFunction(const TransferFunction &tf) {
   Impl &d = *impl_;
-  d.scene.tf = host.tf;
-  d.scene.tf.table = d.tfTable.upload(host.tf.table, size_t(host.tf.size));
-  d.scene.maxOpacity = d.maxOpacity.upload(host.maxOpacity, host.partitions.count);
-  d.scene.sigma = d.sigma.upload(host.sigma, host.partitions.count);
-  d.scene.nodeMaxOpacity = d.nodeMaxOpacity.upload(host.nodeMaxOpacity, sizes.partitionNodes);
+  TransferFunctionRangeView ranges = tf.rangeView();
+  ranges.function.table = d.tfTable.upload(tf.table().data(), tf.table().size());
+  ranges.prefixSum = d.tfPrefixSum.upload(tf.prefixSums().data(), tf.prefixSums().size());
+  ranges.prefixSquares = d.tfPrefixSquares.upload(tf.prefixSquares().data(), tf.prefixSquares().size());
+  ranges.opacityMax = d.tfOpacityMax.upload(tf.opacityMaxima().data(), tf.opacityMaxima().size());
+  d.scene.tf = ranges.function;
+
+  const uint32_t count = d.scene.partitions.count;
+  UVR_CUDA_CHECK(cudaMemset(d.nodeMaxOpacity.data(), 0, d.nodeMaxOpacity.bytes()));
+  UVR_CUDA_CHECK(cudaMemcpy(d.totals.data(), &kEmptyTotals, sizeof kEmptyTotals, cudaMemcpyHostToDevice));
+  partitionMetadataKernel<<<blocksFor(count, kMetadataBlock), kMetadataBlock>>>(
+      ranges, d.scene.partitions, d.kdParents.data(), d.partitionNodes.data(), d.maxOpacity.data(),
+      d.sigma.data(), d.nodeMaxOpacity.data(), d.totals.data());
+  UVR_CUDA_CHECK(cudaGetLastError());
+  normalizeSigmaKernel<<<blocksFor(count, kMetadataBlock), kMetadataBlock>>>(count, d.totals.data(),
+                                                                             d.sigma.data());
+  UVR_CUDA_CHECK(cudaGetLastError());
+  MetadataTotals totals{};
+  d.totals.download(&totals, 1); // waits for the kernels; a fault surfaces here
+  return totals.transparent;
+}
+
+PartitionMetadata CudaRenderer::metadata() const {
+  const Impl &d = *impl_;
+  PartitionMetadata meta;
+  meta.maxOpacity.resize(d.scene.partitions.count);
+  meta.sigma.resize(d.scene.partitions.count);
+  meta.nodeMaxOpacity.resize(d.nodeMaxOpacity.bytes() / sizeof(float));
+  d.maxOpacity.download(meta.maxOpacity.data(), meta.maxOpacity.size());
+  d.sigma.download(meta.sigma.data(), meta.sigma.size());
+  d.nodeMaxOpacity.download(meta.nodeMaxOpacity.data(), meta.nodeMaxOpacity.size());
+  MetadataTotals totals{};
+  d.totals.download(&totals, 1);
+  meta.transparentCount = totals.transparent;
+  return meta;
 }
 
 double CudaRenderer::render(const CameraView &camera, const IntegratorSettings &settings,
@@ -187,7 +314,9 @@ size_t CudaRenderer::sceneBytes() const {
   return d.points.bytes() + d.tets.bytes() + d.pyramids.bytes() + d.wedges.bytes() + d.hexes.bytes() +
          d.tetNeighbors.bytes() + d.bvhCellIds.bytes() + d.values.bytes() + d.maxOpacity.bytes() +
          d.nodeMaxOpacity.bytes() + d.sigma.bytes() + d.bvhNodes.bytes() + d.kdNodes.bytes() +
-         d.nodeBounds.bytes() + d.partitionBounds.bytes() + d.occupancy.bytes() + d.tfTable.bytes();
+         d.nodeBounds.bytes() + d.partitionBounds.bytes() + d.occupancy.bytes() + d.valueMin.bytes() +
+         d.valueMax.bytes() + d.kdParents.bytes() + d.partitionNodes.bytes() + d.totals.bytes() +
+         d.tfTable.bytes() + d.tfPrefixSum.bytes() + d.tfPrefixSquares.bytes() + d.tfOpacityMax.bytes();
 }
 
 const std::string &CudaRenderer::deviceName() const { return impl_->deviceName; }

@@ -1,5 +1,6 @@
-// The CUDA backend's host side: device copies of everything a ray reads, uploaded once per mesh, the transfer
-// function and partition metadata re-uploaded on each change. A plain C++ header: no CUDA types leak out.
+// The CUDA backend's host side: device copies of everything a ray reads, uploaded once per mesh; on each
+// transfer-function change the table is uploaded and the partitions' metadata recomputed on the GPU. A plain
+// C++ header: no CUDA types leak out.
 #pragma once
 
 #include "render/camera.h"
@@ -20,14 +21,18 @@ struct SceneSizes {
 
 class CudaRenderer {
 public:
-  /// Uploads the scene to the current GPU; throws uvr::Error when there is none or memory runs out.
+  /// Uploads the scene to the current GPU (all but the transfer function and the metadata it sets); throws
+  /// uvr::Error when there is none or memory runs out.
   CudaRenderer(const SceneView &scene, const SceneSizes &sizes);
   ~CudaRenderer();
   CudaRenderer(const CudaRenderer &) = delete;
   CudaRenderer &operator=(const CudaRenderer &) = delete;
 
-  /// Re-uploads the transfer-function table and the partition metadata of `scene`.
-  void updateTransferFunction(const SceneView &scene, const SceneSizes &sizes);
+  /// Uploads `tf` and recomputes the partitions' metadata on the GPU, as computePartitionMetadata does on the
+  /// host; returns the number of fully transparent partitions.
+  uint32_t setTransferFunction(const TransferFunction &tf);
+  /// Copies the metadata of the last setTransferFunction back, for checks against the host's.
+  PartitionMetadata metadata() const;
 
   /// Renders into `target`'s host buffers (width x height pixels); returns the milliseconds the kernel took
   /// on the GPU, without the copies.
