@@ -55,7 +55,8 @@ constexpr uint32_t kDefaultLeafSize = 64;
 /// with the ray's exact interval inside the leaf; stops when `visit` returns false. Neighbouring leaves share
 /// the split's t, so the intervals tile the ray with neither gaps nor overlaps. With `nodeMaxOpacity` (per
 /// node, for the current transfer function), whole subtrees that are transparent or whose cells the ray
-/// misses are skipped without visiting their leaves.
+/// misses are skipped without visiting their leaves, and each interval is clipped to its partition's shrunk
+/// box (paper §2.2).
 template <typename Visit>
 UVR_HOST_DEVICE void traversePartitions(const PartitionsView &parts, const Ray &ray, float tMin, float tMax,
                                         const float *nodeMaxOpacity, Visit &&visit) {
@@ -69,7 +70,7 @@ UVR_HOST_DEVICE void traversePartitions(const PartitionsView &parts, const Ray &
   uint32_t node = 0;
   float t0 = tMin, t1 = tMax;
   while (true) {
-    float b0, b1;
+    float b0 = t0, b1 = t1; // what a leaf visits: clipped to its shrunk box when culling
     const bool culled = nodeMaxOpacity && (nodeMaxOpacity[node] <= 0.f ||
                                            !intersectBox(ray, parts.nodeBounds[node], t0, t1, b0, b1));
     const KdNode &n = parts.nodes[node];
@@ -98,7 +99,7 @@ UVR_HOST_DEVICE void traversePartitions(const PartitionsView &parts, const Ray &
       }
       continue;
     }
-    if (!culled && t0 < t1 && !visit(n.child, t0, t1))
+    if (!culled && b0 < b1 && !visit(n.child, b0, b1))
       return;
     if (top == 0)
       return;

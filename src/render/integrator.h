@@ -34,7 +34,6 @@ struct SceneView {
   OccupancyView occupancy;                ///< used by the skipping modes
   const uint32_t *tetNeighbors = nullptr; ///< 4 per tet; see buildTetNeighbors
   PartitionsView partitions;
-  const float *maxOpacity = nullptr;     ///< per partition, for the current transfer function
   const float *nodeMaxOpacity = nullptr; ///< per KD node, the maximum over the partitions below
   const float *sigma = nullptr;          ///< per partition, normalised colour deviation
   TransferFunctionView tf;
@@ -164,17 +163,9 @@ UVR_HOST_DEVICE inline RayResult integrateRay(const SceneView &scene, const Inte
     march(tEnter, tExit, settings.s1);
     return result;
   }
+  // With skipping, the traversal culls transparent partitions and clips each interval to its shrunk box.
   const float *cull = skip ? scene.nodeMaxOpacity : nullptr;
   traversePartitions(scene.partitions, ray, tEnter, tExit, cull, [&](uint32_t part, float t0, float t1) {
-    if (skip) {
-      if (scene.maxOpacity[part] <= 0.f)
-        return true;
-      float b0, b1; // the partition's shrunk box within its leaf (paper §2.2)
-      if (!intersectBox(ray, scene.partitions.bounds[part], t0, t1, b0, b1))
-        return true;
-      t0 = b0;
-      t1 = b1;
-    }
     const float step =
         adaptive ? adaptiveStepSize(settings.s1, settings.s2, settings.p, scene.sigma[part]) : settings.s1;
     return march(t0, t1, step);

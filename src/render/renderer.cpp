@@ -87,7 +87,6 @@ const TransferFunction &Renderer::transferFunction() const {
 SceneView Renderer::sceneView() const {
   SceneView scene = geometryView();
   const PartitionMetadata &meta = metadata();
-  scene.maxOpacity = meta.maxOpacity.data();
   scene.nodeMaxOpacity = meta.nodeMaxOpacity.data();
   scene.sigma = meta.sigma.data();
   scene.tf = tf_->view();

@@ -230,7 +230,6 @@ CudaRenderer::CudaRenderer(const SceneView &host, const SceneSizes &sizes) : imp
   d.sigma.resize(partitionCount);
   d.nodeMaxOpacity.resize(sizes.partitionNodes);
   d.totals.resize(1);
-  scene.maxOpacity = d.maxOpacity.data();
   scene.sigma = d.sigma.data();
   scene.nodeMaxOpacity = d.nodeMaxOpacity.data();
   UVR_CUDA_CHECK(cudaDeviceSynchronize());
