@@ -55,7 +55,7 @@ void runRender(const RenderCommandOptions &o) {
   Frame frame;
   for (int i = 0; i < o.frames; ++i) {
     const Timer timer;
-    frame = renderer.render(camera, settings);
+    renderer.render(camera, settings, frame);
     times.push_back(timer.milliseconds());
     kernelTimes.push_back(frame.kernelMs);
   }

@@ -145,6 +145,12 @@ PartitionMetadata Renderer::deviceMetadata() const { return {}; }
 #endif
 
 Frame Renderer::render(const Camera &camera, const RenderSettings &settings) const {
+  Frame frame;
+  render(camera, settings, frame);
+  return frame;
+}
+
+void Renderer::render(const Camera &camera, const RenderSettings &settings, Frame &frame) const {
   if (!tf_)
     throw Error("no transfer function set");
   const IntegratorSettings &s = settings.integrator;
@@ -152,10 +158,17 @@ Frame Renderer::render(const Camera &camera, const RenderSettings &settings) con
     throw Error("invalid sampling settings: need s1 > 0, s2 >= s1, p >= 1 and unit > 0");
   if (settings.width <= 0 || settings.height <= 0)
     throw Error("invalid image size");
-  Frame frame;
-  frame.image = Image(settings.width, settings.height);
-  frame.opacity.assign(size_t(settings.width) * size_t(settings.height), 0.f);
-  frame.samplesPerPixel.assign(frame.opacity.size(), 0);
+  // Every pixel is written below, so buffers of the right size are reused as they are: no allocation, and
+  // no page faults on fresh memory, from one frame to the next.
+  const size_t pixels = size_t(settings.width) * size_t(settings.height);
+  frame.image.width = settings.width;
+  frame.image.height = settings.height;
+  frame.image.rgb.resize(3 * pixels);
+  frame.opacity.resize(pixels);
+  frame.samplesPerPixel.resize(pixels);
+  frame.samplesTotal = 0;
+  frame.samplesMax = 0;
+  frame.kernelMs = 0.0;
   PixelTarget target;
   target.rgb = frame.image.rgb.data();
   target.opacity = frame.opacity.data();
@@ -175,7 +188,6 @@ Frame Renderer::render(const Camera &camera, const RenderSettings &settings) con
     frame.samplesTotal += n;
     frame.samplesMax = std::max(frame.samplesMax, n);
   }
-  return frame;
 }
 
 } // namespace uvr

@@ -65,6 +65,8 @@ public:
   void prepare(Backend backend) const;
 
   Frame render(const Camera &camera, const RenderSettings &settings) const;
+  /// The same into `frame`, whose buffers are reused when their size matches (no allocation per frame).
+  void render(const Camera &camera, const RenderSettings &settings, Frame &frame) const;
 
   /// The GPU's name and the device memory this renderer holds; empty and 0 until CUDA has been prepared.
   std::string deviceName() const;
