@@ -1,13 +1,13 @@
 #include "accel/bvh.h"
 
 #include "core/error.h"
+#include "core/parallel_bounds.h"
 #include "core/progress.h"
 #include "mesh/cell.h"
 
 #include <embree3/rtcore.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_invoke.h>
-#include <tbb/parallel_reduce.h>
 
 #include <algorithm>
 #include <string>
@@ -132,21 +132,18 @@ Bvh buildBvh(const MeshView &mesh) {
 
   // Embree may use the array beyond the primitive count as scratch space.
   std::vector<RTCBuildPrimitive> prims(cellCount);
-  const Box3f meshBounds = tbb::parallel_reduce( // exact whatever the split: min and max do not round
-      tbb::blocked_range<uint64_t>(0, cellCount), Box3f{},
-      [&](const tbb::blocked_range<uint64_t> &range, Box3f bounds) {
-        for (uint64_t c = range.begin(); c < range.end(); ++c) {
-          const Box3f box = cellBounds(mesh, c);
-          prims[c] = {box.lower.x, box.lower.y, box.lower.z, 0,
-                      box.upper.x, box.upper.y, box.upper.z, uint32_t(c)};
-          bounds.extend(box);
-        }
-        return bounds;
-      },
-      [](Box3f a, const Box3f &b) {
-        a.extend(b);
-        return a;
-      });
+  tbb::parallel_for(tbb::blocked_range<uint64_t>(0, cellCount),
+                    [&](const tbb::blocked_range<uint64_t> &range) {
+                      for (uint64_t c = range.begin(); c < range.end(); ++c) {
+                        const Box3f box = cellBounds(mesh, c);
+                        prims[c] = {box.lower.x, box.lower.y, box.lower.z, 0,
+                                    box.upper.x, box.upper.y, box.upper.z, uint32_t(c)};
+                      }
+                    });
+  const Box3f meshBounds = parallelBounds(cellCount, [&](uint64_t c) {
+    return Box3f{{prims[c].lower_x, prims[c].lower_y, prims[c].lower_z},
+                 {prims[c].upper_x, prims[c].upper_y, prims[c].upper_z}};
+  });
 
   RTCDevice device = rtcNewDevice(nullptr);
   if (!device)

@@ -1,9 +1,9 @@
 #include "accel/occupancy.h"
 
+#include "core/parallel_bounds.h"
 #include "mesh/cell.h"
 
 #include <tbb/parallel_for.h>
-#include <tbb/parallel_reduce.h>
 
 #include <algorithm>
 #include <atomic>
@@ -138,18 +138,7 @@ OccupancyGrid buildOccupancyGrid(const MeshView &mesh, float voxelsPerCell) {
   const uint64_t cells = mesh.cellCount();
   if (cells == 0)
     return grid;
-  // Exact whatever the split: min and max do not round.
-  const Box3f bounds = tbb::parallel_reduce(
-      tbb::blocked_range<uint64_t>(0, cells), Box3f{},
-      [&](const tbb::blocked_range<uint64_t> &range, Box3f box) {
-        for (uint64_t c = range.begin(); c < range.end(); ++c)
-          box.extend(cellBounds(mesh, c));
-        return box;
-      },
-      [](Box3f a, const Box3f &b) {
-        a.extend(b);
-        return a;
-      });
+  const Box3f bounds = parallelBounds(cells, [&](uint64_t c) { return cellBounds(mesh, c); });
   const Vec3f size = bounds.size();
   const double volume = std::max(double(size.x) * size.y * size.z, 1e-30);
   // Cubic voxels; the count is capped so that the grid stays a small fraction of the mesh's memory.

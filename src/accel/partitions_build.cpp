@@ -1,13 +1,13 @@
 #include "accel/partitions.h"
 
 #include "core/error.h"
+#include "core/parallel_bounds.h"
 #include "core/progress.h"
 #include "mesh/cell.h"
 
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_invoke.h>
-#include <tbb/parallel_reduce.h>
 
 #include <algorithm>
 #include <type_traits>
@@ -118,10 +118,7 @@ private:
     const size_t count = size_t(last - first);
     if (count <= leafSize_ || depth >= 48)
       return false;
-    Box3f spread;
-    for (const Vec3f *c = first; c < last; ++c)
-      spread.extend(*c);
-    const Vec3f extent = spread.size();
+    const Vec3f extent = parallelBounds(count, [&](uint64_t i) { return first[i]; }).size();
     const int axis = extent.x >= extent.y && extent.x >= extent.z ? 0 : (extent.y >= extent.z ? 1 : 2);
     middle = first + count / 2;
     selectMedian(first, middle, last, axis);
@@ -225,17 +222,7 @@ Partitions buildPartitions(const MeshView &mesh, uint32_t leafSize) {
                       }
                     });
 
-  Box3f root = tbb::parallel_reduce( // exact whatever the split: min and max do not round
-      tbb::blocked_range<uint64_t>(0, cellCount), Box3f{},
-      [&](const tbb::blocked_range<uint64_t> &range, Box3f box) {
-        for (uint64_t c = range.begin(); c < range.end(); ++c)
-          box.extend(cells[c].bounds);
-        return box;
-      },
-      [](Box3f a, const Box3f &b) {
-        a.extend(b);
-        return a;
-      });
+  Box3f root = parallelBounds(cellCount, [&](uint64_t c) { return cells[c].bounds; });
   // Padding keeps samples on the outermost faces inside the root, whatever the rounding of the slab test.
   const float pad = 1e-5f * length(root.size()) + 1e-30f;
   root.lower = root.lower - Vec3f{pad, pad, pad};
