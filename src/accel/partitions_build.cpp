@@ -249,25 +249,23 @@ Partitions buildPartitions(const MeshView &mesh, uint32_t leafSize) {
                         addToLeaves(parts, cells[c], leaves);
                       progress.advance(range.size());
                     });
-  std::vector<LeafAccumulator> leaves(leafCount);
-  for (const std::vector<LeafAccumulator> &local : perThread)
-    for (uint32_t i = 0; i < leafCount; ++i)
-      leaves[i].merge(local[i]);
-
   parts.valueMin.resize(leafCount);
   parts.valueMax.resize(leafCount);
   parts.cellCounts.resize(leafCount);
-  for (uint32_t i = 0; i < leafCount; ++i) {
+  tbb::parallel_for(uint32_t(0), leafCount, [&](uint32_t i) {
+    LeafAccumulator leaf;
+    for (const std::vector<LeafAccumulator> &local : perThread)
+      leaf.merge(local[i]);
     // Shrunk to the cells it holds, within the leaf (paper §2.2); padded as the root is, since the leaf's own
     // t-interval clips it at render time.
-    Box3f shrunk = intersection(leaves[i].cells, parts.bounds[i]);
+    Box3f shrunk = intersection(leaf.cells, parts.bounds[i]);
     shrunk.lower = shrunk.lower - Vec3f{pad, pad, pad};
     shrunk.upper = shrunk.upper + Vec3f{pad, pad, pad};
     parts.bounds[i] = shrunk;
-    parts.valueMin[i] = leaves[i].valueMin;
-    parts.valueMax[i] = leaves[i].valueMax;
-    parts.cellCounts[i] = leaves[i].count;
-  }
+    parts.valueMin[i] = leaf.valueMin;
+    parts.valueMax[i] = leaf.valueMax;
+    parts.cellCounts[i] = leaf.count;
+  });
   // Children follow their parents in `nodes`, so one backward pass gathers each subtree's box.
   parts.nodeBounds.assign(parts.nodes.size(), Box3f{});
   for (size_t node = parts.nodes.size(); node-- > 0;) {
