@@ -10,6 +10,7 @@
 #include <tbb/parallel_invoke.h>
 
 #include <algorithm>
+#include <array>
 #include <type_traits>
 #include <utility>
 
@@ -85,10 +86,10 @@ public:
       setLeaf(tree, 0, box);
       return tree;
     }
-    const auto [belowBox, aboveBox] = childBoxes(box, node);
+    const std::array<Box3f, 2> childBox = childBoxes(box, node);
     Subtree halves[2];
-    tbb::parallel_invoke([&] { halves[0] = build(belowBox, first, middle, depth + 1); },
-                         [&] { halves[1] = build(aboveBox, middle, last, depth + 1); });
+    tbb::parallel_invoke([&] { halves[0] = build(childBox[0], first, middle, depth + 1); },
+                         [&] { halves[1] = build(childBox[1], middle, last, depth + 1); });
     // The serial layout: this node, its two children, the lower child's descendants, then the upper's.
     node.child = 1;
     tree.nodes = {node, {}, {}};
@@ -139,10 +140,10 @@ private:
     node.child = uint32_t(tree.nodes.size());
     tree.nodes[index] = node;
     tree.nodes.resize(tree.nodes.size() + 2);
-    const auto [below, above] = childBoxes(box, node);
+    const std::array<Box3f, 2> childBox = childBoxes(box, node);
     // Cells with centroid at the split go below or above arbitrarily: their boxes are assigned later.
-    buildSerial(tree, node.child, below, first, middle, depth + 1);
-    buildSerial(tree, node.child + 1, above, middle, last, depth + 1);
+    buildSerial(tree, node.child, childBox[0], first, middle, depth + 1);
+    buildSerial(tree, node.child + 1, childBox[1], middle, last, depth + 1);
   }
 
   static void setLeaf(Subtree &tree, uint32_t index, const Box3f &box) {
@@ -150,7 +151,8 @@ private:
     tree.leafBounds.push_back(box); // the leaf's cell of space, shrunk once its cells are known
   }
 
-  static std::pair<Box3f, Box3f> childBoxes(const Box3f &box, const KdNode &node) {
+  /// The cells of space below and above the split.
+  static std::array<Box3f, 2> childBoxes(const Box3f &box, const KdNode &node) {
     Box3f below = box, above = box;
     below.upper[int(node.axis)] = node.split;
     above.lower[int(node.axis)] = node.split;

@@ -67,16 +67,16 @@ std::vector<uint32_t> buildTetNeighbors(const Mesh &mesh) {
           for (uint64_t k = first[v[1]]; k < first[v[1] + 1]; ++k) {
             const uint32_t other = incident[k];
             const uint32_t *w = tets + 4 * uint64_t(other);
-            if ((other != t) & holds(w, v[2]) & holds(w, v[3]))
-              across[0] = std::min(across[0], other);
+            const bool self = other == t, has2 = holds(w, v[2]), has3 = holds(w, v[3]);
+            across[0] = (!self & has2 & has3) ? std::min(across[0], other) : across[0];
           }
           for (uint64_t k = first[v[0]]; k < first[v[0] + 1]; ++k) {
             const uint32_t other = incident[k];
             const uint32_t *w = tets + 4 * uint64_t(other);
             const bool self = other == t, has1 = holds(w, v[1]), has2 = holds(w, v[2]), has3 = holds(w, v[3]);
-            across[1] = !self & has2 & has3 ? std::min(across[1], other) : across[1];
-            across[2] = !self & has3 & has1 ? std::min(across[2], other) : across[2];
-            across[3] = !self & has1 & has2 ? std::min(across[3], other) : across[3];
+            across[1] = (!self & has2 & has3) ? std::min(across[1], other) : across[1];
+            across[2] = (!self & has3 & has1) ? std::min(across[2], other) : across[2];
+            across[3] = (!self & has1 & has2) ? std::min(across[3], other) : across[3];
           }
           std::copy_n(across, 4, neighbors.begin() + 4 * t);
         }
