@@ -1,12 +1,15 @@
 #include "accel/bvh.h"
 
 #include "core/error.h"
+#include "core/parallel_bounds.h"
 #include "core/progress.h"
 #include "mesh/cell.h"
 
 #include <embree3/rtcore.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
 
+#include <algorithm>
 #include <string>
 #include <utility>
 
@@ -22,6 +25,7 @@ struct BuildNode {
 struct InnerNode : BuildNode {
   BuildNode *children[2];
   Box3f childBounds[2];
+  uint32_t nodeCount, cellCount; // of the subtree, counted before flattening
 };
 
 struct LeafNode : BuildNode {
@@ -64,19 +68,57 @@ bool reportProgress(void *userPtr, double fraction) {
   return true;
 }
 
-void flatten(const BuildNode *node, const Box3f &bounds, uint32_t index, Bvh &bvh) {
+// Subtrees this close to the root are counted and flattened in parallel.
+constexpr int kParallelDepth = 12;
+
+uint32_t subtreeNodes(const BuildNode *node) {
+  return node->leaf ? 1 : static_cast<const InnerNode *>(node)->nodeCount;
+}
+
+uint32_t subtreeCells(const BuildNode *node) {
+  return node->leaf ? static_cast<const LeafNode *>(node)->count
+                    : static_cast<const InnerNode *>(node)->cellCount;
+}
+
+/// Stores in each inner node the number of nodes and cells below it, which place subtrees in the flat arrays.
+void countSubtrees(BuildNode *node, int depth) {
+  if (node->leaf)
+    return;
+  auto *inner = static_cast<InnerNode *>(node);
+  if (depth < kParallelDepth)
+    tbb::parallel_invoke([&] { countSubtrees(inner->children[0], depth + 1); },
+                         [&] { countSubtrees(inner->children[1], depth + 1); });
+  else
+    for (BuildNode *child : inner->children)
+      countSubtrees(child, depth + 1);
+  inner->nodeCount = 1 + subtreeNodes(inner->children[0]) + subtreeNodes(inner->children[1]);
+  inner->cellCount = subtreeCells(inner->children[0]) + subtreeCells(inner->children[1]);
+}
+
+/// Writes `node` at bvh.nodes[index], its descendants from `firstFree` and its cells' ids from `firstCell`,
+/// as a depth-first walk appending nodes and ids would: an inner node's children side by side, then the
+/// first child's descendants, then the second's.
+void flatten(const BuildNode *node, const Box3f &bounds, uint32_t index, uint32_t firstFree,
+             uint32_t firstCell, int depth, Bvh &bvh) {
   if (node->leaf) {
     const auto *leaf = static_cast<const LeafNode *>(node);
-    bvh.nodes[index] = {bounds, uint32_t(bvh.cellIds.size()), leaf->count};
-    bvh.cellIds.insert(bvh.cellIds.end(), leaf->cellIds, leaf->cellIds + leaf->count);
+    bvh.nodes[index] = {bounds, firstCell, leaf->count};
+    std::copy_n(leaf->cellIds, leaf->count, bvh.cellIds.begin() + firstCell);
     return;
   }
   const auto *inner = static_cast<const InnerNode *>(node);
-  const auto first = uint32_t(bvh.nodes.size());
-  bvh.nodes[index] = {bounds, first, 0};
-  bvh.nodes.resize(bvh.nodes.size() + 2);
-  for (int i = 0; i < 2; ++i)
-    flatten(inner->children[i], inner->childBounds[i], first + uint32_t(i), bvh);
+  bvh.nodes[index] = {bounds, firstFree, 0};
+  const BuildNode *const *children = inner->children;
+  auto flattenChild = [&](int i) {
+    const uint32_t before = i == 0 ? 0 : subtreeNodes(children[0]) - 1;
+    flatten(children[i], inner->childBounds[i], firstFree + uint32_t(i), firstFree + 2 + before,
+            firstCell + (i == 0 ? 0 : subtreeCells(children[0])), depth + 1, bvh);
+  };
+  if (depth < kParallelDepth)
+    tbb::parallel_invoke([&] { flattenChild(0); }, [&] { flattenChild(1); });
+  else
+    for (int i = 0; i < 2; ++i)
+      flattenChild(i);
 }
 
 } // namespace
@@ -90,7 +132,6 @@ Bvh buildBvh(const MeshView &mesh) {
 
   // Embree may use the array beyond the primitive count as scratch space.
   std::vector<RTCBuildPrimitive> prims(cellCount);
-  Box3f meshBounds;
   tbb::parallel_for(tbb::blocked_range<uint64_t>(0, cellCount),
                     [&](const tbb::blocked_range<uint64_t> &range) {
                       for (uint64_t c = range.begin(); c < range.end(); ++c) {
@@ -99,9 +140,10 @@ Bvh buildBvh(const MeshView &mesh) {
                                     box.upper.x, box.upper.y, box.upper.z, uint32_t(c)};
                       }
                     });
-  for (uint64_t c = 0; c < cellCount; ++c)
-    meshBounds.extend(Box3f{{prims[c].lower_x, prims[c].lower_y, prims[c].lower_z},
-                            {prims[c].upper_x, prims[c].upper_y, prims[c].upper_z}});
+  const Box3f meshBounds = parallelBounds(cellCount, [&](uint64_t c) {
+    return Box3f{{prims[c].lower_x, prims[c].lower_y, prims[c].lower_z},
+                 {prims[c].upper_x, prims[c].upper_y, prims[c].upper_z}};
+  });
 
   RTCDevice device = rtcNewDevice(nullptr);
   if (!device)
@@ -141,11 +183,11 @@ Bvh buildBvh(const MeshView &mesh) {
     throw Error("building the point-location hierarchy failed (Embree error " + std::to_string(code) + ")");
   }
 
+  countSubtrees(root, 0);
   Bvh bvh;
-  bvh.nodes.reserve(cellCount); // about 2 * cells / (cells per leaf) nodes
-  bvh.cellIds.reserve(cellCount);
-  bvh.nodes.resize(1);
-  flatten(root, meshBounds, 0, bvh);
+  bvh.nodes.resize(subtreeNodes(root));
+  bvh.cellIds.resize(subtreeCells(root));
+  flatten(root, meshBounds, 0, 1, 0, 0, bvh);
   progress.finish();
   rtcReleaseBVH(handle);
   rtcReleaseDevice(device);

@@ -1,5 +1,6 @@
 #include "accel/occupancy.h"
 
+#include "core/parallel_bounds.h"
 #include "mesh/cell.h"
 
 #include <tbb/parallel_for.h>
@@ -35,38 +36,19 @@ struct TetPlanes {
     }
     return true;
   }
-
-  /// Narrows [first, last] to the voxels x of a row (voxel x spans [rowX + x * size.x, + size.x] at fixed y
-  /// and z spans starting at rowY and rowZ) that lie beyond none of the face planes. A box lies beyond plane
-  /// i when its corner nearest along the normal does; along the row that is one linear inequality in x.
-  void clipRow(float rowX, float rowY, float rowZ, Vec3f size, float inverseSizeX, int &first,
-               int &last) const {
-    for (int i = 0; i < 4 && first <= last; ++i) {
-      const Vec3f n = normal[i];
-      const float nearY = n.y > 0.f ? rowY : rowY + size.y, nearZ = n.z > 0.f ? rowZ : rowZ + size.z;
-      const float rest = offset[i] - n.y * nearY - n.z * nearZ; // the box is kept where n.x * nearX <= rest
-      const float bound = (rest * inverseNormalX[i] - rowX) * inverseSizeX;
-      const float lowest = float(first - 1), highest = float(last + 1); // keeps the casts below in range
-      // nearX is rowX + x * size.x where n.x > 0, rowX + (x + 1) * size.x where n.x < 0.
-      if (n.x > 0.f)
-        last = std::min(last, int(std::floor(std::clamp(bound, lowest, highest))));
-      else if (n.x < 0.f)
-        first = std::max(first, int(std::ceil(std::clamp(bound - 1.f, lowest, highest))));
-      else if (rest < 0.f)
-        last = first - 1;
-    }
-  }
 };
 
-/// Sets bits [begin, end] of `bits`, which other threads set too.
-void setBits(std::vector<uint64_t> &bits, uint64_t begin, uint64_t end) {
+/// Sets voxels [first, last] of row (y, z), whose bits other threads set too.
+void setBits(OccupancyGrid &grid, int y, int z, int first, int last) {
+  const uint64_t row = (uint64_t(z) * uint64_t(grid.ny) + uint64_t(y)) * uint64_t(grid.nx);
+  const uint64_t begin = row + uint64_t(first), end = row + uint64_t(last);
   for (uint64_t w = begin >> 6; w <= end >> 6; ++w) {
     uint64_t mask = ~uint64_t(0);
     if (w == begin >> 6)
       mask &= ~uint64_t(0) << (begin & 63);
     if (w == end >> 6)
       mask &= ~uint64_t(0) >> (63 - (end & 63));
-    std::atomic_ref<uint64_t> word(bits[w]);
+    std::atomic_ref<uint64_t> word(grid.bits[w]);
     if ((word.load(std::memory_order_relaxed) & mask) != mask)
       word.fetch_or(mask, std::memory_order_relaxed);
   }
@@ -77,6 +59,78 @@ void voxelRange(float lo, float hi, float origin, float scale, int count, int &f
   last = std::clamp(int(std::floor((hi - origin) * scale)), 0, count - 1);
 }
 
+/// Voxel index ranges, inclusive, of a cell's box.
+struct VoxelRange {
+  int x0, x1, y0, y1, z0, z1;
+};
+
+int floorToInt(float v) {
+  const int truncated = int(v);
+  return truncated - int(float(truncated) > v);
+}
+
+int ceilToInt(float v) {
+  const int truncated = int(v);
+  return truncated + int(float(truncated) < v);
+}
+
+/// Sets the voxels of `range` that lie beyond none of the tet's face planes. A voxel lies beyond plane i
+/// when its corner nearest along the normal does; along a row of voxels in x (voxel x spans
+/// [origin.x + x * size.x, + size.x]) that is one linear inequality in x, which narrows the row's span. Rows
+/// go a batch at a time, one plane after the other, so that the compiler vectorises across rows (2x faster
+/// than a row at a time); the loops over a batch stay rolled, since GCC leaves them scalar once it has
+/// unrolled them. The terms that depend on y alone are computed once per batch of rows.
+void markTet(const TetPlanes &planes, const VoxelRange &range, Vec3f voxelSize, OccupancyGrid &grid) {
+  constexpr int kBatch = 8;
+  const Vec3f origin = grid.origin;
+  const float inverseSizeX = 1.f / voxelSize.x;
+  // Clamped bounds keep the casts in range; one voxel past the range is enough to clear a row.
+  const float lowest = float(range.x0 - 1), highest = float(range.x1 + 1);
+  for (int batchY = range.y0; batchY <= range.y1; batchY += kBatch) {
+    float restY[4][kBatch]; // offset[i] - n.y * nearY, nearY being the row's y nearest along the normal
+    for (int i = 0; i < 4; ++i) {
+      const float normalY = planes.normal[i].y;
+#pragma GCC unroll 1
+      for (int r = 0; r < kBatch; ++r) {
+        const float rowY = origin.y + float(batchY + r) * voxelSize.y;
+        restY[i][r] = planes.offset[i] - normalY * (normalY > 0.f ? rowY : rowY + voxelSize.y);
+      }
+    }
+    const int rows = std::min(kBatch, range.y1 - batchY + 1);
+    for (int z = range.z0; z <= range.z1; ++z) {
+      const float sliceZ = origin.z + float(z) * voxelSize.z;
+      int first[kBatch], last[kBatch];
+      std::fill_n(first, kBatch, range.x0);
+      std::fill_n(last, kBatch, range.x1);
+      for (int i = 0; i < 4; ++i) {
+        const Vec3f n = planes.normal[i];
+        const float zTerm = n.z * (n.z > 0.f ? sliceZ : sliceZ + voxelSize.z);
+        const float inverseNormalX = planes.inverseNormalX[i];
+        float bound[kBatch]; // a voxel is kept where n.x * nearX <= rest, i.e. nearX on the bound's side
+#pragma GCC unroll 1
+        for (int r = 0; r < kBatch; ++r)
+          bound[r] = ((restY[i][r] - zTerm) * inverseNormalX - origin.x) * inverseSizeX;
+        if (n.x > 0.f) { // nearX is the voxel's lower x
+#pragma GCC unroll 1
+          for (int r = 0; r < kBatch; ++r)
+            last[r] = std::min(last[r], floorToInt(clampf(bound[r], lowest, highest)));
+        } else if (n.x < 0.f) { // nearX is its upper x, one voxel further
+#pragma GCC unroll 1
+          for (int r = 0; r < kBatch; ++r)
+            first[r] = std::max(first[r], ceilToInt(clampf(bound[r] - 1.f, lowest, highest)));
+        } else {
+#pragma GCC unroll 1
+          for (int r = 0; r < kBatch; ++r)
+            last[r] = restY[i][r] - zTerm < 0.f ? range.x0 - 1 : last[r];
+        }
+      }
+      for (int r = 0; r < rows; ++r)
+        if (first[r] <= last[r])
+          setBits(grid, batchY + r, z, first[r], last[r]);
+    }
+  }
+}
+
 } // namespace
 
 OccupancyGrid buildOccupancyGrid(const MeshView &mesh, float voxelsPerCell) {
@@ -84,9 +138,7 @@ OccupancyGrid buildOccupancyGrid(const MeshView &mesh, float voxelsPerCell) {
   const uint64_t cells = mesh.cellCount();
   if (cells == 0)
     return grid;
-  Box3f bounds;
-  for (uint64_t c = 0; c < cells; ++c) // cheap next to the marking below, and exact
-    bounds.extend(cellBounds(mesh, c));
+  const Box3f bounds = parallelBounds(cells, [&](uint64_t c) { return cellBounds(mesh, c); });
   const Vec3f size = bounds.size();
   const double volume = std::max(double(size.x) * size.y * size.z, 1e-30);
   // Cubic voxels; the count is capped so that the grid stays a small fraction of the mesh's memory.
@@ -105,27 +157,21 @@ OccupancyGrid buildOccupancyGrid(const MeshView &mesh, float voxelsPerCell) {
   grid.bits.assign((total + 63) / 64, 0);
 
   const Vec3f voxelSize{size.x / float(grid.nx), size.y / float(grid.ny), size.z / float(grid.nz)};
-  const float inverseVoxelX = 1.f / voxelSize.x;
   tbb::parallel_for(uint64_t(0), cells, [&](uint64_t c) {
     const Box3f box = cellBounds(mesh, c);
-    int x0, x1, y0, y1, z0, z1;
-    voxelRange(box.lower.x, box.upper.x, grid.origin.x, grid.voxelsPerUnit.x, grid.nx, x0, x1);
-    voxelRange(box.lower.y, box.upper.y, grid.origin.y, grid.voxelsPerUnit.y, grid.ny, y0, y1);
-    voxelRange(box.lower.z, box.upper.z, grid.origin.z, grid.voxelsPerUnit.z, grid.nz, z0, z1);
+    VoxelRange range;
+    voxelRange(box.lower.x, box.upper.x, grid.origin.x, grid.voxelsPerUnit.x, grid.nx, range.x0, range.x1);
+    voxelRange(box.lower.y, box.upper.y, grid.origin.y, grid.voxelsPerUnit.y, grid.ny, range.y0, range.y1);
+    voxelRange(box.lower.z, box.upper.z, grid.origin.z, grid.voxelsPerUnit.z, grid.nz, range.z0, range.z1);
     // A tet fills a sixth of its box or less: voxels wholly beyond one of its face planes stay clear.
-    TetPlanes planes{};
-    const bool tet = c < mesh.tetCount && planes.set(mesh, c);
-    for (int z = z0; z <= z1; ++z)
-      for (int y = y0; y <= y1; ++y) {
-        int first = x0, last = x1;
-        if (tet)
-          planes.clipRow(grid.origin.x, grid.origin.y + float(y) * voxelSize.y,
-                         grid.origin.z + float(z) * voxelSize.z, voxelSize, inverseVoxelX, first, last);
-        if (first > last)
-          continue;
-        const uint64_t row = (uint64_t(z) * uint64_t(grid.ny) + uint64_t(y)) * uint64_t(grid.nx);
-        setBits(grid.bits, row + uint64_t(first), row + uint64_t(last));
-      }
+    TetPlanes planes;
+    if (c < mesh.tetCount && planes.set(mesh, c)) {
+      markTet(planes, range, voxelSize, grid);
+      return;
+    }
+    for (int z = range.z0; z <= range.z1; ++z)
+      for (int y = range.y0; y <= range.y1; ++y)
+        setBits(grid, y, z, range.x0, range.x1);
   });
   return grid;
 }

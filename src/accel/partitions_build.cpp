@@ -1,13 +1,18 @@
 #include "accel/partitions.h"
 
 #include "core/error.h"
+#include "core/parallel_bounds.h"
 #include "core/progress.h"
 #include "mesh/cell.h"
 
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
 
 #include <algorithm>
+#include <array>
+#include <type_traits>
+#include <utility>
 
 namespace uvr {
 
@@ -38,64 +43,149 @@ struct LeafAccumulator {
   }
 };
 
-/// Splits `ids` (cells by centroid) in place at the median centroid along the axis where the centroids spread
-/// most (paper §2.1), down to `leafSize` cells. Nodes are appended children-adjacent, as KdNode expects.
+/// Reorders [first, last) so that `middle` holds the element that would be there if sorted along `axis`,
+/// none after it smaller and none before it larger.
+void selectMedian(Vec3f *first, Vec3f *middle, Vec3f *last, int axis) {
+  auto along = [&](auto axisConstant) {
+    std::nth_element(first, middle, last, [](Vec3f a, Vec3f b) {
+      return a[decltype(axisConstant)::value] < b[decltype(axisConstant)::value];
+    });
+  };
+  if (axis == 0)
+    along(std::integral_constant<int, 0>{});
+  else if (axis == 1)
+    along(std::integral_constant<int, 1>{});
+  else
+    along(std::integral_constant<int, 2>{});
+}
+
+/// Nodes and leaf boxes of a subtree, as the depth-first build lays them out: nodes[0] is the root, and an
+/// inner node's children are appended side by side before either child's subtree.
+struct Subtree {
+  std::vector<KdNode> nodes;
+  std::vector<Box3f> leafBounds; ///< the leaves' cells of space, in depth-first order
+};
+
+/// Splits cells at the median centroid along the axis where the centroids spread most (paper §2.1), down to
+/// `leafSize` cells. Subtrees of many cells are built in parallel and joined in the layout of the serial
+/// depth-first build, so that the result does not depend on the threads.
 class TreeBuilder {
 public:
-  TreeBuilder(const std::vector<Vec3f> &centroids, uint32_t leafSize, Partitions &parts)
-      : centroids_(centroids), leafSize_(leafSize), parts_(parts) {}
+  explicit TreeBuilder(uint32_t leafSize) : leafSize_(leafSize) {}
 
-  void build(uint32_t node, const Box3f &box, uint32_t *first, uint32_t *last, int depth) {
-    const size_t count = size_t(last - first);
-    if (count > leafSize_ && depth < 48) {
-      Box3f spread;
-      for (const uint32_t *id = first; id < last; ++id)
-        spread.extend(centroids_[*id]);
-      const Vec3f extent = spread.size();
-      const int axis = extent.x >= extent.y && extent.x >= extent.z ? 0 : (extent.y >= extent.z ? 1 : 2);
-      uint32_t *middle = first + count / 2;
-      std::nth_element(first, middle, last,
-                       [&](uint32_t a, uint32_t b) { return centroids_[a][axis] < centroids_[b][axis]; });
-      const float split = centroids_[*middle][axis];
-      // A split on the box's face leaves one side empty: stop there.
-      if (split > box.lower[axis] && split < box.upper[axis]) {
-        const auto child = uint32_t(parts_.nodes.size());
-        parts_.nodes[node] = {split, uint32_t(axis), child};
-        parts_.nodes.resize(parts_.nodes.size() + 2);
-        Box3f below = box, above = box;
-        below.upper[axis] = split;
-        above.lower[axis] = split;
-        // Cells with centroid at the split go below or above arbitrarily: their boxes are assigned later.
-        build(child, below, first, middle, depth + 1);
-        build(child + 1, above, middle, last, depth + 1);
-        return;
-      }
+  Subtree build(const Box3f &box, Vec3f *first, Vec3f *last, int depth = 0) const {
+    Subtree tree;
+    tree.nodes.resize(1);
+    if (size_t(last - first) < kParallelCells) {
+      buildSerial(tree, 0, box, first, last, depth);
+      return tree;
     }
-    parts_.nodes[node] = {0.f, KdNode::kLeaf, uint32_t(parts_.bounds.size())};
-    parts_.bounds.push_back(box); // the leaf's cell of space, shrunk once its cells are known
+    KdNode node;
+    Vec3f *middle;
+    if (!split(box, first, last, depth, node, middle)) {
+      setLeaf(tree, 0, box);
+      return tree;
+    }
+    const std::array<Box3f, 2> childBox = childBoxes(box, node);
+    Subtree halves[2];
+    tbb::parallel_invoke([&] { halves[0] = build(childBox[0], first, middle, depth + 1); },
+                         [&] { halves[1] = build(childBox[1], middle, last, depth + 1); });
+    // The serial layout: this node, its two children, the lower child's descendants, then the upper's.
+    node.child = 1;
+    tree.nodes = {node, {}, {}};
+    auto descendants = uint32_t(tree.nodes.size()), leaves = 0u;
+    for (int side = 0; side < 2; ++side) {
+      const Subtree &half = halves[side];
+      auto placed = [&](KdNode n) {
+        n.child += n.axis == KdNode::kLeaf ? leaves : descendants - 1;
+        return n;
+      };
+      tree.nodes[1 + side] = placed(half.nodes[0]);
+      for (size_t i = 1; i < half.nodes.size(); ++i)
+        tree.nodes.push_back(placed(half.nodes[i]));
+      tree.leafBounds.insert(tree.leafBounds.end(), half.leafBounds.begin(), half.leafBounds.end());
+      descendants += uint32_t(half.nodes.size() - 1);
+      leaves += uint32_t(half.leafBounds.size());
+    }
+    return tree;
   }
 
 private:
-  const std::vector<Vec3f> &centroids_;
+  // Below this many cells a subtree is built serially: each parallel level copies the nodes below it.
+  static constexpr size_t kParallelCells = 1 << 16;
+
+  /// Picks the split of [first, last) and reorders it about the median; false where the node is a leaf.
+  bool split(const Box3f &box, Vec3f *first, Vec3f *last, int depth, KdNode &node, Vec3f *&middle) const {
+    const size_t count = size_t(last - first);
+    if (count <= leafSize_ || depth >= 48)
+      return false;
+    const Vec3f extent = parallelBounds(count, [&](uint64_t i) { return first[i]; }).size();
+    const int axis = extent.x >= extent.y && extent.x >= extent.z ? 0 : (extent.y >= extent.z ? 1 : 2);
+    middle = first + count / 2;
+    selectMedian(first, middle, last, axis);
+    node = {(*middle)[axis], uint32_t(axis), 0};
+    // A split on the box's face leaves one side empty: stop there.
+    return node.split > box.lower[axis] && node.split < box.upper[axis];
+  }
+
+  /// Makes tree.nodes[index] the root of the subtree of [first, last), appending its descendants.
+  void buildSerial(Subtree &tree, uint32_t index, const Box3f &box, Vec3f *first, Vec3f *last,
+                   int depth) const {
+    KdNode node;
+    Vec3f *middle;
+    if (!split(box, first, last, depth, node, middle)) {
+      setLeaf(tree, index, box);
+      return;
+    }
+    node.child = uint32_t(tree.nodes.size());
+    tree.nodes[index] = node;
+    tree.nodes.resize(tree.nodes.size() + 2);
+    const std::array<Box3f, 2> childBox = childBoxes(box, node);
+    // Cells with centroid at the split go below or above arbitrarily: their boxes are assigned later.
+    buildSerial(tree, node.child, childBox[0], first, middle, depth + 1);
+    buildSerial(tree, node.child + 1, childBox[1], middle, last, depth + 1);
+  }
+
+  static void setLeaf(Subtree &tree, uint32_t index, const Box3f &box) {
+    tree.nodes[index] = {0.f, KdNode::kLeaf, uint32_t(tree.leafBounds.size())};
+    tree.leafBounds.push_back(box); // the leaf's cell of space, shrunk once its cells are known
+  }
+
+  /// The cells of space below and above the split.
+  static std::array<Box3f, 2> childBoxes(const Box3f &box, const KdNode &node) {
+    Box3f below = box, above = box;
+    below.upper[int(node.axis)] = node.split;
+    above.lower[int(node.axis)] = node.split;
+    return {below, above};
+  }
+
   uint32_t leafSize_;
-  Partitions &parts_;
 };
 
-/// Adds `cell` to every leaf its box touches (a cell straddling leaves is listed in each, paper §2.1).
+/// Adds `cell` to every leaf its box touches (a cell straddling leaves is listed in each, paper §2.1). Most
+/// cells go down one side of every split: the descent pushes only where a box straddles.
 void addToLeaves(const Partitions &parts, const CellInfo &cell, std::vector<LeafAccumulator> &leaves) {
+  const float lower[3] = {cell.bounds.lower.x, cell.bounds.lower.y, cell.bounds.lower.z};
+  const float upper[3] = {cell.bounds.upper.x, cell.bounds.upper.y, cell.bounds.upper.z};
   uint32_t stack[64];
   int top = 0;
-  stack[top++] = 0;
-  while (top > 0) {
-    const KdNode &node = parts.nodes[stack[--top]];
-    if (node.axis == KdNode::kLeaf) {
-      leaves[node.child].add(cell);
-      continue;
+  uint32_t node = 0;
+  while (true) {
+    const KdNode &n = parts.nodes[node];
+    if (n.axis == KdNode::kLeaf) {
+      leaves[n.child].add(cell);
+    } else {
+      const bool below = lower[n.axis] <= n.split, above = upper[n.axis] >= n.split;
+      if (below && above && top < 64)
+        stack[top++] = n.child + 1;
+      if (below || above) {
+        node = below ? n.child : n.child + 1;
+        continue;
+      }
     }
-    if (cell.bounds.lower[int(node.axis)] <= node.split && top < 64)
-      stack[top++] = node.child;
-    if (cell.bounds.upper[int(node.axis)] >= node.split && top < 64)
-      stack[top++] = node.child + 1;
+    if (top == 0)
+      return;
+    node = stack[--top];
   }
 }
 
@@ -134,9 +224,7 @@ Partitions buildPartitions(const MeshView &mesh, uint32_t leafSize) {
                       }
                     });
 
-  Box3f root;
-  for (const CellInfo &info : cells)
-    root.extend(info.bounds);
+  Box3f root = parallelBounds(cellCount, [&](uint64_t c) { return cells[c].bounds; });
   // Padding keeps samples on the outermost faces inside the root, whatever the rounding of the slab test.
   const float pad = 1e-5f * length(root.size()) + 1e-30f;
   root.lower = root.lower - Vec3f{pad, pad, pad};
@@ -146,13 +234,10 @@ Partitions buildPartitions(const MeshView &mesh, uint32_t leafSize) {
   parts.rootBounds = root;
   {
     std::vector<Vec3f> centroids(cellCount);
-    std::vector<uint32_t> ids(cellCount);
-    for (uint64_t c = 0; c < cellCount; ++c) {
-      centroids[c] = cells[c].bounds.center();
-      ids[c] = uint32_t(c);
-    }
-    parts.nodes.resize(1);
-    TreeBuilder(centroids, leafSize, parts).build(0, root, ids.data(), ids.data() + cellCount, 0);
+    tbb::parallel_for(uint64_t(0), cellCount, [&](uint64_t c) { centroids[c] = cells[c].bounds.center(); });
+    Subtree tree = TreeBuilder(leafSize).build(root, centroids.data(), centroids.data() + cellCount);
+    parts.nodes = std::move(tree.nodes);
+    parts.bounds = std::move(tree.leafBounds);
   }
 
   // Each thread gathers into its own accumulators, merged afterwards: no atomics on the hot path.
@@ -166,25 +251,23 @@ Partitions buildPartitions(const MeshView &mesh, uint32_t leafSize) {
                         addToLeaves(parts, cells[c], leaves);
                       progress.advance(range.size());
                     });
-  std::vector<LeafAccumulator> leaves(leafCount);
-  for (const std::vector<LeafAccumulator> &local : perThread)
-    for (uint32_t i = 0; i < leafCount; ++i)
-      leaves[i].merge(local[i]);
-
   parts.valueMin.resize(leafCount);
   parts.valueMax.resize(leafCount);
   parts.cellCounts.resize(leafCount);
-  for (uint32_t i = 0; i < leafCount; ++i) {
+  tbb::parallel_for(uint32_t(0), leafCount, [&](uint32_t i) {
+    LeafAccumulator leaf;
+    for (const std::vector<LeafAccumulator> &local : perThread)
+      leaf.merge(local[i]);
     // Shrunk to the cells it holds, within the leaf (paper §2.2); padded as the root is, since the leaf's own
     // t-interval clips it at render time.
-    Box3f shrunk = intersection(leaves[i].cells, parts.bounds[i]);
+    Box3f shrunk = intersection(leaf.cells, parts.bounds[i]);
     shrunk.lower = shrunk.lower - Vec3f{pad, pad, pad};
     shrunk.upper = shrunk.upper + Vec3f{pad, pad, pad};
     parts.bounds[i] = shrunk;
-    parts.valueMin[i] = leaves[i].valueMin;
-    parts.valueMax[i] = leaves[i].valueMax;
-    parts.cellCounts[i] = leaves[i].count;
-  }
+    parts.valueMin[i] = leaf.valueMin;
+    parts.valueMax[i] = leaf.valueMax;
+    parts.cellCounts[i] = leaf.count;
+  });
   // Children follow their parents in `nodes`, so one backward pass gathers each subtree's box.
   parts.nodeBounds.assign(parts.nodes.size(), Box3f{});
   for (size_t node = parts.nodes.size(); node-- > 0;) {

@@ -3,57 +3,85 @@
 #include "core/progress.h"
 
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_scan.h>
+
+#include <algorithm>
+#include <atomic>
 
 namespace uvr {
+namespace {
+
+bool holds(const uint32_t *tet, uint32_t point) {
+  return (tet[0] == point) | (tet[1] == point) | (tet[2] == point) | (tet[3] == point);
+}
+
+} // namespace
 
 std::vector<uint32_t> buildTetNeighbors(const Mesh &mesh) {
   const uint64_t tetCount = mesh.tetCount();
+  const uint64_t entryCount = 4 * tetCount;
+  const size_t pointCount = mesh.points.size();
   const uint32_t *tets = mesh.tets.data();
 
-  // Point -> incident tets, as compressed rows.
-  std::vector<uint64_t> first(mesh.points.size() + 1, 0);
-  for (uint64_t i = 0; i < 4 * tetCount; ++i)
-    ++first[tets[i] + 1];
-  for (size_t p = 0; p < mesh.points.size(); ++p)
-    first[p + 1] += first[p];
-  std::vector<uint32_t> incident(4 * tetCount);
+  // Point -> incident tets, as compressed rows: counted, offset, then filled, each in parallel. The order
+  // within a row depends on the threads' timing; the search below does not.
+  std::vector<uint64_t> first(pointCount + 1, 0);
+  tbb::parallel_for(tbb::blocked_range<uint64_t>(0, entryCount),
+                    [&](const tbb::blocked_range<uint64_t> &range) {
+                      for (uint64_t i = range.begin(); i < range.end(); ++i)
+                        std::atomic_ref<uint64_t>(first[tets[i] + 1]).fetch_add(1, std::memory_order_relaxed);
+                    });
+  tbb::parallel_scan(
+      tbb::blocked_range<size_t>(1, pointCount + 1), uint64_t(0),
+      [&](const tbb::blocked_range<size_t> &range, uint64_t sum, bool final) {
+        for (size_t p = range.begin(); p < range.end(); ++p) {
+          sum += first[p];
+          if (final)
+            first[p] = sum;
+        }
+        return sum;
+      },
+      std::plus<uint64_t>());
+  std::vector<uint32_t> incident(entryCount);
   {
     std::vector<uint64_t> next(first.begin(), first.end() - 1);
-    for (uint64_t i = 0; i < 4 * tetCount; ++i)
-      incident[next[tets[i]]++] = uint32_t(i / 4);
+    tbb::parallel_for(tbb::blocked_range<uint64_t>(0, entryCount),
+                      [&](const tbb::blocked_range<uint64_t> &range) {
+                        for (uint64_t i = range.begin(); i < range.end(); ++i) {
+                          std::atomic_ref<uint64_t> slot(next[tets[i]]);
+                          incident[slot.fetch_add(1, std::memory_order_relaxed)] = uint32_t(i / 4);
+                        }
+                      });
   }
 
-  // Incidence rows come out sorted (tets are visited in order), so the tets sharing a face are found by
-  // merging two rows and checking the third point.
-  std::vector<uint32_t> neighbors(4 * tetCount, 0xffffffffu);
+  // The tet across a face is the smallest other tet holding its three points. Face 0 (opposite corner 0)
+  // holds corner 1 and the others hold corner 0, so the rows of these two corners list every candidate;
+  // each is tested against all the faces it may share at once, without branches.
+  std::vector<uint32_t> neighbors(entryCount);
   Progress progress("building tet adjacency", tetCount);
-  tbb::parallel_for(tbb::blocked_range<uint64_t>(0, tetCount),
-                    [&](const tbb::blocked_range<uint64_t> &range) {
-                      for (uint64_t t = range.begin(); t < range.end(); ++t) {
-                        const uint32_t *v = tets + 4 * t;
-                        for (int face = 0; face < 4; ++face) {
-                          const uint32_t a = v[(face + 1) % 4], b = v[(face + 2) % 4], c = v[(face + 3) % 4];
-                          uint64_t i = first[b], j = first[c];
-                          const uint64_t iEnd = first[b + 1], jEnd = first[c + 1];
-                          while (i < iEnd && j < jEnd) {
-                            if (incident[i] < incident[j]) {
-                              ++i;
-                            } else if (incident[j] < incident[i]) {
-                              ++j;
-                            } else {
-                              const uint32_t other = incident[i];
-                              const uint32_t *w = tets + 4 * uint64_t(other);
-                              if (other != t && (w[0] == a || w[1] == a || w[2] == a || w[3] == a)) {
-                                neighbors[4 * t + uint64_t(face)] = other;
-                                break;
-                              }
-                              ++i, ++j;
-                            }
-                          }
-                        }
-                      }
-                      progress.advance(range.size());
-                    });
+  tbb::parallel_for(
+      tbb::blocked_range<uint64_t>(0, tetCount), [&](const tbb::blocked_range<uint64_t> &range) {
+        for (uint64_t t = range.begin(); t < range.end(); ++t) {
+          const uint32_t *v = tets + 4 * t;
+          uint32_t across[4] = {0xffffffffu, 0xffffffffu, 0xffffffffu, 0xffffffffu};
+          for (uint64_t k = first[v[1]]; k < first[v[1] + 1]; ++k) {
+            const uint32_t other = incident[k];
+            const uint32_t *w = tets + 4 * uint64_t(other);
+            const bool self = other == t, has2 = holds(w, v[2]), has3 = holds(w, v[3]);
+            across[0] = (!self & has2 & has3) ? std::min(across[0], other) : across[0];
+          }
+          for (uint64_t k = first[v[0]]; k < first[v[0] + 1]; ++k) {
+            const uint32_t other = incident[k];
+            const uint32_t *w = tets + 4 * uint64_t(other);
+            const bool self = other == t, has1 = holds(w, v[1]), has2 = holds(w, v[2]), has3 = holds(w, v[3]);
+            across[1] = (!self & has2 & has3) ? std::min(across[1], other) : across[1];
+            across[2] = (!self & has3 & has1) ? std::min(across[2], other) : across[2];
+            across[3] = (!self & has1 & has2) ? std::min(across[3], other) : across[3];
+          }
+          std::copy_n(across, 4, neighbors.begin() + 4 * t);
+        }
+        progress.advance(range.size());
+      });
   progress.finish();
   return neighbors;
 }
