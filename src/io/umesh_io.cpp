@@ -186,13 +186,17 @@ private:
       fail(8 + 8 + bad * 12, "vertex " + std::to_string(bad) + " is not finite");
   }
 
-  /// Reads one cell type's array and, in one parallel pass over chunks of cells: checks its point indices
-  /// (signed in the file), winds each cell as VTK expects, and learns whether the points are numbered by
-  /// first use (each corner is a point seen before or the next unseen one).
+  /// Reads one cell type's array and, in one parallel pass over chunks of cells, each read from the file by
+  /// the thread that then: checks its point indices (signed in the file), winds each cell as VTK expects, and
+  /// learns whether the points are numbered by first use (each corner is a point seen before or the next
+  /// unseen one). Reading inside the pass spreads the copy from the page cache over the cores too.
   void readCells(std::vector<uint32_t> &cells, int corners, CellType type, const std::string &what,
                  Mesh &mesh) {
-    const uint64_t first = position_ + 8;
-    const uint64_t n = array(cells, uint64_t(corners), what);
+    const uint64_t n = count(uint64_t(corners) * sizeof(uint32_t), what);
+    const uint64_t first = position_;
+    const uint64_t cellBytes = uint64_t(corners) * sizeof(uint32_t);
+    cells.resize(n * uint64_t(corners));
+    position_ += n * cellBytes;
     const uint32_t pointCount = uint32_t(std::min<uint64_t>(mesh.points.size(), UINT32_MAX));
     constexpr uint64_t kChunkCells = 1 << 14;
     struct Chunk {
@@ -204,7 +208,10 @@ private:
     std::vector<Chunk> chunks((n + kChunkCells - 1) / kChunkCells);
     tbb::parallel_for(uint64_t(0), uint64_t(chunks.size()), [&](uint64_t k) {
       Chunk &chunk = chunks[k];
-      for (uint64_t c = k * kChunkCells, end = std::min(n, c + kChunkCells); c < end; ++c) {
+      const uint64_t begin = k * kChunkCells, end = std::min(n, begin + kChunkCells);
+      file_.read(first + begin * cellBytes, &cells[begin * uint64_t(corners)], (end - begin) * cellBytes);
+      progress_.advance((end - begin) * cellBytes);
+      for (uint64_t c = begin; c < end; ++c) {
         uint32_t *v = &cells[c * uint64_t(corners)];
         bool valid = true;
         for (int i = 0; i < corners; ++i) {
