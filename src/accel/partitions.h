@@ -23,7 +23,6 @@ struct KdNode {
 struct PartitionsView {
   const KdNode *nodes = nullptr;
   const Box3f *nodeBounds = nullptr; ///< per node, the union of the shrunk boxes of the partitions below
-  const Box3f *bounds = nullptr;     ///< shrunk box per partition
   const float *valueMin = nullptr;   ///< scalar range per partition, for the transfer-function metadata
   const float *valueMax = nullptr;
   Box3f rootBounds; ///< the mesh bounds, slightly padded: the KD-tree's root cell
@@ -33,15 +32,14 @@ struct PartitionsView {
 struct Partitions {
   std::vector<KdNode> nodes;
   std::vector<Box3f> nodeBounds;
-  std::vector<Box3f> bounds;
+  std::vector<Box3f> bounds;             ///< shrunk box per partition (what nodeBounds holds for its leaf)
   std::vector<float> valueMin, valueMax; ///< scalar range of the cells listed in each partition
   std::vector<uint64_t> cellCounts;      ///< cells listed (a cell straddling leaves is listed in each)
   Box3f rootBounds;
 
   uint32_t count() const { return uint32_t(bounds.size()); }
   PartitionsView view() const {
-    return {nodes.data(),    nodeBounds.data(), bounds.data(), valueMin.data(),
-            valueMax.data(), rootBounds,        count()};
+    return {nodes.data(), nodeBounds.data(), valueMin.data(), valueMax.data(), rootBounds, count()};
   }
 };
 

@@ -176,7 +176,7 @@ struct CudaRenderer::Impl {
   DeviceBuffer<float> tfOpacityMax;
   DeviceBuffer<BvhNode> bvhNodes;
   DeviceBuffer<KdNode> kdNodes;
-  DeviceBuffer<Box3f> nodeBounds, partitionBounds;
+  DeviceBuffer<Box3f> nodeBounds;
   DeviceBuffer<uint64_t> occupancy;
   DeviceBuffer<Vec4f> tfTable;
   DeviceBuffer<uint8_t> rgb;
@@ -223,7 +223,6 @@ CudaRenderer::CudaRenderer(const SceneView &host, const SceneSizes &sizes) : imp
   scene.partitions.nodes = d.kdNodes.upload(host.partitions.nodes, sizes.partitionNodes);
   scene.partitions.nodeBounds = d.nodeBounds.upload(host.partitions.nodeBounds, sizes.partitionNodes);
   const uint32_t partitionCount = host.partitions.count;
-  scene.partitions.bounds = d.partitionBounds.upload(host.partitions.bounds, partitionCount);
   scene.partitions.valueMin = d.valueMin.upload(host.partitions.valueMin, partitionCount);
   scene.partitions.valueMax = d.valueMax.upload(host.partitions.valueMax, partitionCount);
   d.kdParents.resize(sizes.partitionNodes);
@@ -318,9 +317,9 @@ size_t CudaRenderer::sceneBytes() const {
   return d.points.bytes() + d.tets.bytes() + d.pyramids.bytes() + d.wedges.bytes() + d.hexes.bytes() +
          d.tetNeighbors.bytes() + d.bvhCellIds.bytes() + d.values.bytes() + d.maxOpacity.bytes() +
          d.nodeMaxOpacity.bytes() + d.sigma.bytes() + d.bvhNodes.bytes() + d.kdNodes.bytes() +
-         d.nodeBounds.bytes() + d.partitionBounds.bytes() + d.occupancy.bytes() + d.valueMin.bytes() +
-         d.valueMax.bytes() + d.kdParents.bytes() + d.partitionNodes.bytes() + d.totals.bytes() +
-         d.tfTable.bytes() + d.tfPrefixSum.bytes() + d.tfPrefixSquares.bytes() + d.tfOpacityMax.bytes();
+         d.nodeBounds.bytes() + d.occupancy.bytes() + d.valueMin.bytes() + d.valueMax.bytes() +
+         d.kdParents.bytes() + d.partitionNodes.bytes() + d.totals.bytes() + d.tfTable.bytes() +
+         d.tfPrefixSum.bytes() + d.tfPrefixSquares.bytes() + d.tfOpacityMax.bytes();
 }
 
 const std::string &CudaRenderer::deviceName() const { return impl_->deviceName; }
