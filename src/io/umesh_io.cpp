@@ -192,9 +192,9 @@ private:
   /// unseen one). Reading inside the pass spreads the copy from the page cache over the cores too.
   void readCells(std::vector<uint32_t> &cells, int corners, CellType type, const std::string &what,
                  Mesh &mesh) {
-    const uint64_t n = count(uint64_t(corners) * sizeof(uint32_t), what);
-    const uint64_t first = position_;
     const uint64_t cellBytes = uint64_t(corners) * sizeof(uint32_t);
+    const uint64_t n = count(cellBytes, what);
+    const uint64_t first = position_;
     cells.resize(n * uint64_t(corners));
     position_ += n * cellBytes;
     const uint32_t pointCount = uint32_t(std::min<uint64_t>(mesh.points.size(), UINT32_MAX));

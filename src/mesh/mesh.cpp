@@ -1,6 +1,7 @@
 #include "mesh/mesh.h"
 
 #include "core/error.h"
+#include "core/parallel_bounds.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_reduce.h>
@@ -126,10 +127,7 @@ int vertexCount(uint8_t vtkType) {
 }
 
 Box3f Mesh::bounds() const {
-  Box3f box;
-  for (const Vec3f &p : points)
-    box.extend(p);
-  return box;
+  return parallelBounds(points.size(), [&](uint64_t i) { return points[i]; });
 }
 
 int Mesh::findField(const std::string &name) const {
