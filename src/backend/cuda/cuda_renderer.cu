@@ -110,19 +110,18 @@ struct MetadataTotals {
 constexpr MetadataTotals kEmptyTotals{0x7f800000u /* +inf */, 0u, 0u};
 constexpr int kMetadataBlock = 256;
 
-/// Per partition, as computePartitionMetadata on the host: the maximum opacity, the colour variance (into
-/// `variance`, normalised by normalizeSigmaKernel) and the KD nodes' maxima (zeroed beforehand).
+/// Per partition, as computePartitionMetadata on the host: the maximum opacity (at its leaf node, and raised
+/// into the nodes above, zeroed beforehand) and the colour variance (into `variance`, normalised by
+/// normalizeSigmaKernel).
 __global__ void partitionMetadataKernel(TransferFunctionRangeView tf, PartitionsView parts,
                                         const uint32_t *parents, const uint32_t *partitionNodes,
-                                        float *maxOpacity, float *variance, float *nodeMaxOpacity,
-                                        MetadataTotals *totals) {
+                                        float *variance, float *nodeMaxOpacity, MetadataTotals *totals) {
   const uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
   bool drawn = false;
   float v = 0.f;
   if (i < parts.count) {
     const float opacity = maxf(tf.maxOpacity(parts.valueMin[i], parts.valueMax[i]), 0.f);
     v = tf.colorVariance(parts.valueMin[i], parts.valueMax[i]);
-    maxOpacity[i] = opacity;
     variance[i] = v;
     drawn = opacity > 0.f;
     // Raise the nodes above to this maximum; stop at one that holds as much already: whoever raised it
@@ -169,7 +168,7 @@ struct CudaRenderer::Impl {
   SceneView scene; // device pointers
   DeviceBuffer<Vec3f> points;
   DeviceBuffer<uint32_t> tets, pyramids, wedges, hexes, tetNeighbors, bvhCellIds;
-  DeviceBuffer<float> values, maxOpacity, nodeMaxOpacity, sigma, valueMin, valueMax;
+  DeviceBuffer<float> values, nodeMaxOpacity, sigma, valueMin, valueMax;
   DeviceBuffer<uint32_t> kdParents, partitionNodes;
   DeviceBuffer<MetadataTotals> totals;
   DeviceBuffer<double> tfPrefixSum, tfPrefixSquares;
@@ -230,7 +229,6 @@ CudaRenderer::CudaRenderer(const SceneView &host, const SceneSizes &sizes) : imp
   linkNodesKernel<<<blocksFor(sizes.partitionNodes, kMetadataBlock), kMetadataBlock>>>(
       scene.partitions.nodes, uint32_t(sizes.partitionNodes), d.kdParents.data(), d.partitionNodes.data());
   UVR_CUDA_CHECK(cudaGetLastError());
-  d.maxOpacity.resize(partitionCount);
   d.sigma.resize(partitionCount);
   d.nodeMaxOpacity.resize(sizes.partitionNodes);
   d.totals.resize(1);
@@ -254,8 +252,8 @@ uint32_t CudaRenderer::setTransferFunction(const TransferFunction &tf) {
   UVR_CUDA_CHECK(cudaMemset(d.nodeMaxOpacity.data(), 0, d.nodeMaxOpacity.bytes()));
   UVR_CUDA_CHECK(cudaMemcpy(d.totals.data(), &kEmptyTotals, sizeof kEmptyTotals, cudaMemcpyHostToDevice));
   partitionMetadataKernel<<<blocksFor(count, kMetadataBlock), kMetadataBlock>>>(
-      ranges, d.scene.partitions, d.kdParents.data(), d.partitionNodes.data(), d.maxOpacity.data(),
-      d.sigma.data(), d.nodeMaxOpacity.data(), d.totals.data());
+      ranges, d.scene.partitions, d.kdParents.data(), d.partitionNodes.data(), d.sigma.data(),
+      d.nodeMaxOpacity.data(), d.totals.data());
   UVR_CUDA_CHECK(cudaGetLastError());
   normalizeSigmaKernel<<<blocksFor(count, kMetadataBlock), kMetadataBlock>>>(count, d.totals.data(),
                                                                              d.sigma.data());
@@ -268,12 +266,17 @@ uint32_t CudaRenderer::setTransferFunction(const TransferFunction &tf) {
 PartitionMetadata CudaRenderer::metadata() const {
   const Impl &d = *impl_;
   PartitionMetadata meta;
-  meta.maxOpacity.resize(d.scene.partitions.count);
-  meta.sigma.resize(d.scene.partitions.count);
+  const uint32_t count = d.scene.partitions.count;
+  meta.sigma.resize(count);
   meta.nodeMaxOpacity.resize(d.nodeMaxOpacity.bytes() / sizeof(float));
-  d.maxOpacity.download(meta.maxOpacity.data(), meta.maxOpacity.size());
-  d.sigma.download(meta.sigma.data(), meta.sigma.size());
+  d.sigma.download(meta.sigma.data(), count);
   d.nodeMaxOpacity.download(meta.nodeMaxOpacity.data(), meta.nodeMaxOpacity.size());
+  // A partition's maximum is its leaf node's.
+  std::vector<uint32_t> leafNodes(count);
+  d.partitionNodes.download(leafNodes.data(), count);
+  meta.maxOpacity.resize(count);
+  for (uint32_t i = 0; i < count; ++i)
+    meta.maxOpacity[i] = meta.nodeMaxOpacity[leafNodes[i]];
   MetadataTotals totals{};
   d.totals.download(&totals, 1);
   meta.transparentCount = totals.transparent;
@@ -315,11 +318,11 @@ size_t CudaRenderer::memoryBytes() const {
 size_t CudaRenderer::sceneBytes() const {
   const Impl &d = *impl_;
   return d.points.bytes() + d.tets.bytes() + d.pyramids.bytes() + d.wedges.bytes() + d.hexes.bytes() +
-         d.tetNeighbors.bytes() + d.bvhCellIds.bytes() + d.values.bytes() + d.maxOpacity.bytes() +
-         d.nodeMaxOpacity.bytes() + d.sigma.bytes() + d.bvhNodes.bytes() + d.kdNodes.bytes() +
-         d.nodeBounds.bytes() + d.occupancy.bytes() + d.valueMin.bytes() + d.valueMax.bytes() +
-         d.kdParents.bytes() + d.partitionNodes.bytes() + d.totals.bytes() + d.tfTable.bytes() +
-         d.tfPrefixSum.bytes() + d.tfPrefixSquares.bytes() + d.tfOpacityMax.bytes();
+         d.tetNeighbors.bytes() + d.bvhCellIds.bytes() + d.values.bytes() + d.nodeMaxOpacity.bytes() +
+         d.sigma.bytes() + d.bvhNodes.bytes() + d.kdNodes.bytes() + d.nodeBounds.bytes() +
+         d.occupancy.bytes() + d.valueMin.bytes() + d.valueMax.bytes() + d.kdParents.bytes() +
+         d.partitionNodes.bytes() + d.totals.bytes() + d.tfTable.bytes() + d.tfPrefixSum.bytes() +
+         d.tfPrefixSquares.bytes() + d.tfOpacityMax.bytes();
 }
 
 const std::string &CudaRenderer::deviceName() const { return impl_->deviceName; }
