@@ -1,11 +1,13 @@
 // The CUDA backend against the CPU one, frame by frame, on every cell type and mode. Runs where a GPU is.
 #include "core/error.h"
 #include "mesh/procedural_mesh.h"
+#include "mesh/tet_neighbors.h"
 #include "render/renderer.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <random>
 
 using namespace uvr;
 
@@ -20,7 +22,88 @@ bool haveCudaDevice(const Renderer &renderer) {
   }
 }
 
+bool sameBox(const Box3f &a, const Box3f &b) {
+  return a.lower.x == b.lower.x && a.lower.y == b.lower.y && a.lower.z == b.lower.z &&
+         a.upper.x == b.upper.x && a.upper.y == b.upper.y && a.upper.z == b.upper.z;
+}
+
+/// Walks both KD-trees from `a` and `b` down, expecting the same splits and the same partitions below them
+/// (the GPU lays nodes out level by level, the host depth first).
+void expectSameTree(const Partitions &host, uint32_t a, const Partitions &device, uint32_t b) {
+  const KdNode &x = host.nodes[a], &y = device.nodes[b];
+  ASSERT_EQ(x.axis, y.axis) << "host node " << a;
+  EXPECT_TRUE(sameBox(host.nodeBounds[a], device.nodeBounds[b])) << "host node " << a;
+  if (x.axis == KdNode::kLeaf) {
+    EXPECT_TRUE(sameBox(host.bounds[x.child], device.bounds[y.child])) << "host partition " << x.child;
+    EXPECT_EQ(host.valueMin[x.child], device.valueMin[y.child]) << "host partition " << x.child;
+    EXPECT_EQ(host.valueMax[x.child], device.valueMax[y.child]) << "host partition " << x.child;
+    EXPECT_EQ(host.cellCounts[x.child], device.cellCounts[y.child]) << "host partition " << x.child;
+    return;
+  }
+  ASSERT_EQ(x.split, y.split) << "host node " << a;
+  expectSameTree(host, x.child, device, y.child);
+  expectSameTree(host, x.child + 1, device, y.child + 1);
+}
+
+/// The GPU's hierarchy is its own: checked for what point location needs of it.
+void expectValidBvh(const MeshView &mesh, const Bvh &bvh) {
+  std::vector<int> listed(mesh.cellCount(), 0);
+  std::vector<uint32_t> pending{0};
+  while (!pending.empty()) {
+    const BvhNode node = bvh.nodes[pending.back()];
+    pending.pop_back();
+    if (node.count > 0) {
+      EXPECT_LE(node.count, 8u);
+      for (uint32_t i = node.first; i < node.first + node.count; ++i) {
+        const uint32_t cell = bvh.cellIds[i];
+        ++listed[cell];
+        Box3f both = node.bounds;
+        both.extend(cellBounds(mesh, cell));
+        EXPECT_TRUE(sameBox(both, node.bounds)) << "cell " << cell << " outside its leaf";
+      }
+      continue;
+    }
+    for (uint32_t child : {node.first, node.first + 1}) {
+      Box3f both = node.bounds;
+      both.extend(bvh.nodes[child].bounds);
+      EXPECT_TRUE(sameBox(both, node.bounds)) << "node " << child << " outside its parent";
+      pending.push_back(child);
+    }
+  }
+  for (size_t c = 0; c < listed.size(); ++c)
+    ASSERT_EQ(listed[c], 1) << "cell " << c;
+}
+
 } // namespace
+
+TEST(BackendsAgree, CudaBuildsTheHostsAccelerationData) {
+  for (CellType type : {CellType::Tetra, CellType::Hexahedron, CellType::Wedge}) {
+    // Jittered points; the cells of a grid still share many centroid coordinates, which tests the ties.
+    const Mesh mesh = buildMesh(makeBoxGrid(
+                                    type, 14, {{-1.f, -1.f, -1.f}, {2.f, 1.f, 1.5f}},
+                                    [](Vec3f p) { return 0.5f + 0.4f * std::sin(3.f * p.x) * p.y; }, 0.2f),
+                                "box");
+    const MeshView view = makeMeshView(mesh, mesh.findField("f"));
+    for (uint32_t leafSize : {1u, 7u, 64u}) {
+      Renderer renderer(mesh, mesh.findField("f"), leafSize);
+      if (!haveCudaDevice(renderer))
+        GTEST_SKIP() << "no CUDA GPU here; scripts/gpu-check runs this where there is one";
+      const AccelerationCopy device = renderer.deviceAcceleration();
+      const Partitions &host = renderer.partitions();
+      ASSERT_EQ(device.partitions.count(), host.count()) << "leaf size " << leafSize;
+      ASSERT_EQ(device.partitions.nodes.size(), host.nodes.size());
+      EXPECT_TRUE(sameBox(device.partitions.rootBounds, host.rootBounds));
+      expectSameTree(host, 0, device.partitions, 0);
+      EXPECT_EQ(device.tetNeighbors, buildTetNeighbors(mesh));
+      const OccupancyGrid grid = buildOccupancyGrid(view);
+      EXPECT_EQ(device.occupancy.nx, grid.nx);
+      EXPECT_EQ(device.occupancy.ny, grid.ny);
+      EXPECT_EQ(device.occupancy.nz, grid.nz);
+      EXPECT_EQ(device.occupancy.bits, grid.bits);
+      expectValidBvh(view, device.bvh);
+    }
+  }
+}
 
 TEST(BackendsAgree, CudaRendersTheCpuImage) {
   for (CellType type : {CellType::Tetra, CellType::Hexahedron, CellType::Wedge, CellType::Pyramid}) {
@@ -78,10 +161,11 @@ TEST(BackendsAgree, CudaComputesTheHostsPartitionMetadata) {
     map.opacityPoints = opacity;
     const TransferFunction tf(map, 0.f, 1.f);
     renderer.setTransferFunction(tf);
-    const PartitionMetadata host = computePartitionMetadata(renderer.partitions(), tf);
+    // The GPU's own partitions, whose nodes are laid out differently from the host's.
+    const PartitionMetadata host = computePartitionMetadata(renderer.deviceAcceleration().partitions, tf);
     const PartitionMetadata device = renderer.deviceMetadata();
     ASSERT_GT(host.transparentCount, 0u);
-    ASSERT_LT(host.transparentCount, renderer.partitions().count());
+    ASSERT_LT(host.transparentCount, renderer.partitionCount(Backend::Cuda));
     EXPECT_EQ(device.transparentCount, host.transparentCount);
     EXPECT_EQ(renderer.transparentPartitions(), host.transparentCount);
     ASSERT_EQ(device.maxOpacity.size(), host.maxOpacity.size());

@@ -43,8 +43,8 @@ void runRender(const RenderCommandOptions &o) {
   settings.integrator = chooseSampling(o.view, mesh);
 
   Renderer renderer(mesh, loaded.fieldIndex, o.view.leafSize);
-  // The scene goes to the GPU first, outside the frame times, so that the transfer function's update is
-  // timed where the frames use it.
+  // The acceleration data is built first, outside the frame times (for CUDA on the GPU, so that the transfer
+  // function's update is timed where the frames use it).
   renderer.prepare(settings.backend);
   const ValueRange range = transferRange(o.view, mesh.fields[size_t(loaded.fieldIndex)]);
   renderer.setTransferFunction(
@@ -73,7 +73,7 @@ void runRender(const RenderCommandOptions &o) {
       frameStats(mesh, renderer, settings, frame, renderMs, o.view.leafSize, loaded.fieldIndex);
   std::fprintf(stderr, "uvr: %s %dx%d, %llu cells, %u partitions, %.1f samples/pixel, %.1f ms/frame\n",
                modeName(settings.integrator.mode), settings.width, settings.height,
-               static_cast<unsigned long long>(mesh.cellCount()), renderer.partitions().count(),
+               static_cast<unsigned long long>(mesh.cellCount()), renderer.partitionCount(settings.backend),
                stats["samples_per_pixel_mean"].get<double>(), renderMs);
   if (!o.stats.empty()) {
     stats["load_ms"] = loaded.loadMs;

@@ -34,10 +34,6 @@ struct Bvh {
 /// Builds the hierarchy with Embree's SAH builder (all cores) and flattens it.
 Bvh buildBvh(const MeshView &mesh);
 
-/// The same hierarchy with every subtree of at most `maxLeafCells` cells made one leaf: far fewer nodes (the
-/// GPU's copy, where nodes would otherwise take most of the memory) and the same cells found for every point.
-Bvh collapseBvh(const Bvh &bvh, uint32_t maxLeafCells);
-
 /// Calls `visit(cell)` for every cell whose leaf box contains `p`, until it returns true. Returns whether
 /// one did.
 template <typename Visit> UVR_HOST_DEVICE bool findCell(const BvhView &bvh, Vec3f p, Visit &&visit) {

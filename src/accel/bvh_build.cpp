@@ -194,43 +194,4 @@ Bvh buildBvh(const MeshView &mesh) {
   return bvh;
 }
 
-Bvh collapseBvh(const Bvh &bvh, uint32_t maxLeafCells) {
-  // Children come after their parent and a subtree's cells are contiguous (the flattening is depth first), so
-  // one backward pass gives each subtree's cell count and first cell entry.
-  const size_t n = bvh.nodes.size();
-  std::vector<uint32_t> cells(n), firstCell(n);
-  for (size_t i = n; i-- > 0;) {
-    const BvhNode &node = bvh.nodes[i];
-    if (node.count > 0) {
-      cells[i] = node.count;
-      firstCell[i] = node.first;
-    } else {
-      cells[i] = cells[node.first] + cells[node.first + 1];
-      firstCell[i] = firstCell[node.first];
-    }
-  }
-  Bvh collapsed;
-  collapsed.cellIds = bvh.cellIds;
-  collapsed.nodes.reserve(n);
-  collapsed.nodes.push_back(bvh.nodes[0]);
-  std::vector<std::pair<uint32_t, uint32_t>> pending{{0u, 0u}}; // (old node, new node)
-  while (!pending.empty()) {
-    const auto [from, to] = pending.back();
-    pending.pop_back();
-    const BvhNode &node = bvh.nodes[from];
-    if (node.count > 0 || cells[from] <= maxLeafCells) {
-      collapsed.nodes[to] = {node.bounds, firstCell[from], cells[from]};
-      continue;
-    }
-    const auto children = uint32_t(collapsed.nodes.size());
-    collapsed.nodes[to] = {node.bounds, children, 0};
-    collapsed.nodes.push_back(bvh.nodes[node.first]);
-    collapsed.nodes.push_back(bvh.nodes[node.first + 1]);
-    pending.push_back({node.first, children});
-    pending.push_back({node.first + 1, children + 1});
-  }
-  collapsed.nodes.shrink_to_fit();
-  return collapsed;
-}
-
 } // namespace uvr

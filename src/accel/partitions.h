@@ -4,6 +4,7 @@
 
 #include "core/host_device.h"
 #include "core/vec.h"
+#include "mesh/cell.h"
 #include "mesh/mesh_view.h"
 
 #include <cstdint>
@@ -48,6 +49,77 @@ Partitions buildPartitions(const MeshView &mesh, uint32_t leafSize);
 
 /// Default `leafSize`: measured on the brain meshes (see README, "Choosing defaults").
 constexpr uint32_t kDefaultLeafSize = 64;
+
+// The steps of the build that the host's and the GPU's share, so that both make the same partitions.
+
+/// Where a cell sits for the median splits: its box's centre, with -0 made +0 so that orders by value and by
+/// bit pattern agree. Ties are broken by cell index, which makes the tree independent of how it is built.
+UVR_HOST_DEVICE inline Vec3f partitionCentroid(const Box3f &cellBox) {
+  const Vec3f c = cellBox.center();
+  return {c.x + 0.f, c.y + 0.f, c.z + 0.f};
+}
+
+/// The axis along which points spanning `extent` spread most; the first of equals.
+UVR_HOST_DEVICE inline int widestAxis(Vec3f extent) {
+  return extent.x >= extent.y && extent.x >= extent.z ? 0 : (extent.y >= extent.z ? 1 : 2);
+}
+
+/// How far the root box and every shrunk box reach past the cells: keeps samples on the outermost faces
+/// inside, whatever the rounding of the slab test.
+inline float partitionPadding(const Box3f &meshBounds) { return 1e-5f * length(meshBounds.size()) + 1e-30f; }
+
+/// Deeper nodes are leaves whatever their cell count (identical centroids cannot be split anyway).
+constexpr int kMaxPartitionDepth = 48;
+
+/// The scalar range a cell contributes to its partitions: empty where it holds only NaN, [0, 0] for geometry
+/// alone (no field).
+UVR_HOST_DEVICE inline void cellValueRange(const MeshView &mesh, uint64_t c, float &lo, float &hi) {
+  if (!mesh.values) {
+    lo = hi = 0.f;
+  } else if (mesh.cellCentered) {
+    const float value = mesh.values[c];
+    lo = value == value ? value : INFINITY;
+    hi = value == value ? value : -INFINITY;
+  } else {
+    lo = INFINITY;
+    hi = -INFINITY;
+    forEachCellVertex(mesh, c, [&](uint32_t v) {
+      // fminf/fmaxf skip NaN, so one NaN vertex cannot poison the range.
+      lo = fminf(lo, mesh.values[v]);
+      hi = fmaxf(hi, mesh.values[v]);
+    });
+  }
+}
+
+/// Calls `visit(partition)` for every leaf that a cell with box `box` touches (a cell straddling leaves is
+/// listed in each, paper §2.1). Most cells go down one side of every split: the descent pushes only where a
+/// box straddles.
+template <typename Visit>
+UVR_HOST_DEVICE void forEachLeafTouching(const KdNode *nodes, const Box3f &box, Visit &&visit) {
+  const float lower[3] = {box.lower.x, box.lower.y, box.lower.z};
+  const float upper[3] = {box.upper.x, box.upper.y, box.upper.z};
+  constexpr int kStackSize = 64;
+  uint32_t stack[kStackSize];
+  int top = 0;
+  uint32_t node = 0;
+  while (true) {
+    const KdNode &n = nodes[node];
+    if (n.axis == KdNode::kLeaf) {
+      visit(n.child);
+    } else {
+      const bool below = lower[n.axis] <= n.split, above = upper[n.axis] >= n.split;
+      if (below && above && top < kStackSize)
+        stack[top++] = n.child + 1;
+      if (below || above) {
+        node = below ? n.child : n.child + 1;
+        continue;
+      }
+    }
+    if (top == 0)
+      return;
+    node = stack[--top];
+  }
+}
 
 /// Visits the partitions that the ray [tMin, tMax] crosses, front to back, as `visit(partition, t0, t1)`
 /// with the ray's exact interval inside the leaf; stops when `visit` returns false. Neighbouring leaves share

@@ -43,12 +43,19 @@ struct LeafAccumulator {
   }
 };
 
+/// A cell's centroid and index, ordered along an axis by centroid and then by index.
+struct Centroid {
+  Vec3f p;
+  uint32_t cell;
+};
+
 /// Reorders [first, last) so that `middle` holds the element that would be there if sorted along `axis`,
 /// none after it smaller and none before it larger.
-void selectMedian(Vec3f *first, Vec3f *middle, Vec3f *last, int axis) {
+void selectMedian(Centroid *first, Centroid *middle, Centroid *last, int axis) {
   auto along = [&](auto axisConstant) {
-    std::nth_element(first, middle, last, [](Vec3f a, Vec3f b) {
-      return a[decltype(axisConstant)::value] < b[decltype(axisConstant)::value];
+    std::nth_element(first, middle, last, [](const Centroid &a, const Centroid &b) {
+      constexpr int kAxis = decltype(axisConstant)::value;
+      return a.p[kAxis] < b.p[kAxis] || (a.p[kAxis] == b.p[kAxis] && a.cell < b.cell);
     });
   };
   if (axis == 0)
@@ -73,7 +80,7 @@ class TreeBuilder {
 public:
   explicit TreeBuilder(uint32_t leafSize) : leafSize_(leafSize) {}
 
-  Subtree build(const Box3f &box, Vec3f *first, Vec3f *last, int depth = 0) const {
+  Subtree build(const Box3f &box, Centroid *first, Centroid *last, int depth = 0) const {
     Subtree tree;
     tree.nodes.resize(1);
     if (size_t(last - first) < kParallelCells) {
@@ -81,7 +88,7 @@ public:
       return tree;
     }
     KdNode node;
-    Vec3f *middle;
+    Centroid *middle;
     if (!split(box, first, last, depth, node, middle)) {
       setLeaf(tree, 0, box);
       return tree;
@@ -115,24 +122,24 @@ private:
   static constexpr size_t kParallelCells = 1 << 16;
 
   /// Picks the split of [first, last) and reorders it about the median; false where the node is a leaf.
-  bool split(const Box3f &box, Vec3f *first, Vec3f *last, int depth, KdNode &node, Vec3f *&middle) const {
+  bool split(const Box3f &box, Centroid *first, Centroid *last, int depth, KdNode &node,
+             Centroid *&middle) const {
     const size_t count = size_t(last - first);
-    if (count <= leafSize_ || depth >= 48)
+    if (count <= leafSize_ || depth >= kMaxPartitionDepth)
       return false;
-    const Vec3f extent = parallelBounds(count, [&](uint64_t i) { return first[i]; }).size();
-    const int axis = extent.x >= extent.y && extent.x >= extent.z ? 0 : (extent.y >= extent.z ? 1 : 2);
+    const int axis = widestAxis(parallelBounds(count, [&](uint64_t i) { return first[i].p; }).size());
     middle = first + count / 2;
     selectMedian(first, middle, last, axis);
-    node = {(*middle)[axis], uint32_t(axis), 0};
+    node = {middle->p[axis], uint32_t(axis), 0};
     // A split on the box's face leaves one side empty: stop there.
     return node.split > box.lower[axis] && node.split < box.upper[axis];
   }
 
   /// Makes tree.nodes[index] the root of the subtree of [first, last), appending its descendants.
-  void buildSerial(Subtree &tree, uint32_t index, const Box3f &box, Vec3f *first, Vec3f *last,
+  void buildSerial(Subtree &tree, uint32_t index, const Box3f &box, Centroid *first, Centroid *last,
                    int depth) const {
     KdNode node;
-    Vec3f *middle;
+    Centroid *middle;
     if (!split(box, first, last, depth, node, middle)) {
       setLeaf(tree, index, box);
       return;
@@ -162,33 +169,6 @@ private:
   uint32_t leafSize_;
 };
 
-/// Adds `cell` to every leaf its box touches (a cell straddling leaves is listed in each, paper §2.1). Most
-/// cells go down one side of every split: the descent pushes only where a box straddles.
-void addToLeaves(const Partitions &parts, const CellInfo &cell, std::vector<LeafAccumulator> &leaves) {
-  const float lower[3] = {cell.bounds.lower.x, cell.bounds.lower.y, cell.bounds.lower.z};
-  const float upper[3] = {cell.bounds.upper.x, cell.bounds.upper.y, cell.bounds.upper.z};
-  uint32_t stack[64];
-  int top = 0;
-  uint32_t node = 0;
-  while (true) {
-    const KdNode &n = parts.nodes[node];
-    if (n.axis == KdNode::kLeaf) {
-      leaves[n.child].add(cell);
-    } else {
-      const bool below = lower[n.axis] <= n.split, above = upper[n.axis] >= n.split;
-      if (below && above && top < 64)
-        stack[top++] = n.child + 1;
-      if (below || above) {
-        node = below ? n.child : n.child + 1;
-        continue;
-      }
-    }
-    if (top == 0)
-      return;
-    node = stack[--top];
-  }
-}
-
 } // namespace
 
 Partitions buildPartitions(const MeshView &mesh, uint32_t leafSize) {
@@ -205,36 +185,22 @@ Partitions buildPartitions(const MeshView &mesh, uint32_t leafSize) {
                       for (uint64_t c = range.begin(); c < range.end(); ++c) {
                         CellInfo &info = cells[c];
                         info.bounds = cellBounds(mesh, c);
-                        if (!mesh.values) {
-                          info.valueMin = info.valueMax = 0.f; // geometry alone, e.g. to count partitions
-                        } else if (mesh.cellCentered) {
-                          // A NaN cell has no value to draw: an empty range, which the leaf's min/max ignore.
-                          const float value = mesh.values[c];
-                          info.valueMin = value == value ? value : INFINITY;
-                          info.valueMax = value == value ? value : -INFINITY;
-                        } else {
-                          info.valueMin = INFINITY;
-                          info.valueMax = -INFINITY;
-                          forEachCellVertex(mesh, c, [&](uint32_t v) {
-                            // fminf/fmaxf skip NaN, so one NaN vertex cannot poison the range.
-                            info.valueMin = fminf(info.valueMin, mesh.values[v]);
-                            info.valueMax = fmaxf(info.valueMax, mesh.values[v]);
-                          });
-                        }
+                        cellValueRange(mesh, c, info.valueMin, info.valueMax);
                       }
                     });
 
   Box3f root = parallelBounds(cellCount, [&](uint64_t c) { return cells[c].bounds; });
-  // Padding keeps samples on the outermost faces inside the root, whatever the rounding of the slab test.
-  const float pad = 1e-5f * length(root.size()) + 1e-30f;
+  const float pad = partitionPadding(root);
   root.lower = root.lower - Vec3f{pad, pad, pad};
   root.upper = root.upper + Vec3f{pad, pad, pad};
 
   Partitions parts;
   parts.rootBounds = root;
   {
-    std::vector<Vec3f> centroids(cellCount);
-    tbb::parallel_for(uint64_t(0), cellCount, [&](uint64_t c) { centroids[c] = cells[c].bounds.center(); });
+    std::vector<Centroid> centroids(cellCount);
+    tbb::parallel_for(uint64_t(0), cellCount, [&](uint64_t c) {
+      centroids[c] = {partitionCentroid(cells[c].bounds), uint32_t(c)};
+    });
     Subtree tree = TreeBuilder(leafSize).build(root, centroids.data(), centroids.data() + cellCount);
     parts.nodes = std::move(tree.nodes);
     parts.bounds = std::move(tree.leafBounds);
@@ -248,7 +214,8 @@ Partitions buildPartitions(const MeshView &mesh, uint32_t leafSize) {
                     [&](const tbb::blocked_range<uint64_t> &range) {
                       std::vector<LeafAccumulator> &leaves = perThread.local();
                       for (uint64_t c = range.begin(); c < range.end(); ++c)
-                        addToLeaves(parts, cells[c], leaves);
+                        forEachLeafTouching(parts.nodes.data(), cells[c].bounds,
+                                            [&](uint32_t leaf) { leaves[leaf].add(cells[c]); });
                       progress.advance(range.size());
                     });
   parts.valueMin.resize(leafCount);

@@ -9,13 +9,6 @@
 #include <atomic>
 
 namespace uvr {
-namespace {
-
-bool holds(const uint32_t *tet, uint32_t point) {
-  return (tet[0] == point) | (tet[1] == point) | (tet[2] == point) | (tet[3] == point);
-}
-
-} // namespace
 
 std::vector<uint32_t> buildTetNeighbors(const Mesh &mesh) {
   const uint64_t tetCount = mesh.tetCount();
@@ -54,34 +47,17 @@ std::vector<uint32_t> buildTetNeighbors(const Mesh &mesh) {
                       });
   }
 
-  // The tet across a face is the smallest other tet holding its three points. Face 0 (opposite corner 0)
-  // holds corner 1 and the others hold corner 0, so the rows of these two corners list every candidate;
-  // each is tested against all the faces it may share at once, without branches.
   std::vector<uint32_t> neighbors(entryCount);
   Progress progress("building tet adjacency", tetCount);
-  tbb::parallel_for(
-      tbb::blocked_range<uint64_t>(0, tetCount), [&](const tbb::blocked_range<uint64_t> &range) {
-        for (uint64_t t = range.begin(); t < range.end(); ++t) {
-          const uint32_t *v = tets + 4 * t;
-          uint32_t across[4] = {0xffffffffu, 0xffffffffu, 0xffffffffu, 0xffffffffu};
-          for (uint64_t k = first[v[1]]; k < first[v[1] + 1]; ++k) {
-            const uint32_t other = incident[k];
-            const uint32_t *w = tets + 4 * uint64_t(other);
-            const bool self = other == t, has2 = holds(w, v[2]), has3 = holds(w, v[3]);
-            across[0] = (!self & has2 & has3) ? std::min(across[0], other) : across[0];
-          }
-          for (uint64_t k = first[v[0]]; k < first[v[0] + 1]; ++k) {
-            const uint32_t other = incident[k];
-            const uint32_t *w = tets + 4 * uint64_t(other);
-            const bool self = other == t, has1 = holds(w, v[1]), has2 = holds(w, v[2]), has3 = holds(w, v[3]);
-            across[1] = (!self & has2 & has3) ? std::min(across[1], other) : across[1];
-            across[2] = (!self & has3 & has1) ? std::min(across[2], other) : across[2];
-            across[3] = (!self & has1 & has2) ? std::min(across[3], other) : across[3];
-          }
-          std::copy_n(across, 4, neighbors.begin() + 4 * t);
-        }
-        progress.advance(range.size());
-      });
+  tbb::parallel_for(tbb::blocked_range<uint64_t>(0, tetCount),
+                    [&](const tbb::blocked_range<uint64_t> &range) {
+                      for (uint64_t t = range.begin(); t < range.end(); ++t) {
+                        uint32_t across[4];
+                        findTetNeighbors(tets, t, first.data(), incident.data(), across);
+                        std::copy_n(across, 4, neighbors.begin() + 4 * t);
+                      }
+                      progress.advance(range.size());
+                    });
   progress.finish();
   return neighbors;
 }

@@ -62,12 +62,12 @@ nlohmann::json frameStats(const Mesh &mesh, const Renderer &renderer, const Rend
       {"width", settings.width},
       {"height", settings.height},
       {"cells", mesh.cellCount()},
-      {"partitions", renderer.partitions().count()},
+      {"partitions", renderer.partitionCount(settings.backend)},
       {"partitions_skipped", skipping ? renderer.transparentPartitions() : 0},
       {"samples_total", frame.samplesTotal},
       {"samples_per_pixel_mean", double(frame.samplesTotal) / pixels},
       {"samples_per_pixel_max", frame.samplesMax},
-      {"build_ms", renderer.buildMs()},
+      {"build_ms", renderer.buildMs(settings.backend)},
       {"tf_update_ms", renderer.tfUpdateMs()},
       {"render_ms", renderMs},
       {"s1", is.s1},
@@ -84,6 +84,10 @@ nlohmann::json frameStats(const Mesh &mesh, const Renderer &renderer, const Rend
     stats["device"] = renderer.deviceName();
     stats["gpu_memory_bytes"] = renderer.deviceMemoryBytes();
     stats["gpu_scene_bytes"] = renderer.deviceSceneBytes();
+    nlohmann::json steps = nlohmann::json::object();
+    for (const auto &[step, ms] : renderer.deviceBuildSteps())
+      steps[step] = ms;
+    stats["gpu_build_steps_ms"] = steps;
   }
   return stats;
 }

@@ -45,17 +45,39 @@ Backend parseBackend(const std::string &name) {
   throw Error("unknown backend '" + name + "': expected cpu or cuda");
 }
 
-Renderer::Renderer(const Mesh &mesh, int fieldIndex, uint32_t leafSize) : mesh_(mesh) {
+struct Renderer::HostAcceleration {
+  Bvh bvh;
+  OccupancyGrid occupancy;
+  std::vector<uint32_t> tetNeighbors;
+  Partitions partitions;
+  double buildMs = 0.0;
+};
+
+Renderer::Renderer(const Mesh &mesh, int fieldIndex, uint32_t leafSize) : mesh_(mesh), leafSize_(leafSize) {
   if (fieldIndex < 0 || size_t(fieldIndex) >= mesh.fields.size())
     throw Error("the mesh has no scalar field to render");
-  const Timer timer;
+  if (leafSize == 0)
+    throw Error("the partition leaf size must be at least 1");
   meshView_ = makeMeshView(mesh_, fieldIndex);
-  bvh_ = buildBvh(meshView_);
-  occupancy_ = buildOccupancyGrid(meshView_);
-  tetNeighbors_ = buildTetNeighbors(mesh_);
-  partitions_ = buildPartitions(meshView_, leafSize);
-  buildMs_ = timer.milliseconds();
 }
+
+Renderer::~Renderer() = default;
+
+const Renderer::HostAcceleration &Renderer::host() const {
+  if (!host_) {
+    const Timer timer;
+    auto built = std::make_unique<HostAcceleration>();
+    built->bvh = buildBvh(meshView_);
+    built->occupancy = buildOccupancyGrid(meshView_);
+    built->tetNeighbors = buildTetNeighbors(mesh_);
+    built->partitions = buildPartitions(meshView_, leafSize_);
+    built->buildMs = timer.milliseconds();
+    host_ = std::move(built);
+  }
+  return *host_;
+}
+
+const Partitions &Renderer::partitions() const { return host().partitions; }
 
 void Renderer::setTransferFunction(TransferFunction tf) {
   const Timer timer;
@@ -72,7 +94,7 @@ void Renderer::setTransferFunction(TransferFunction tf) {
 
 const PartitionMetadata &Renderer::metadata() const {
   if (!metadataCurrent_) {
-    metadata_ = computePartitionMetadata(partitions_, transferFunction());
+    metadata_ = computePartitionMetadata(partitions(), transferFunction());
     metadataCurrent_ = true;
   }
   return metadata_;
@@ -85,7 +107,13 @@ const TransferFunction &Renderer::transferFunction() const {
 }
 
 SceneView Renderer::sceneView() const {
-  SceneView scene = geometryView();
+  const HostAcceleration &accel = host();
+  SceneView scene;
+  scene.mesh = meshView_;
+  scene.bvh = accel.bvh.view();
+  scene.occupancy = accel.occupancy.view();
+  scene.tetNeighbors = accel.tetNeighbors.empty() ? nullptr : accel.tetNeighbors.data();
+  scene.partitions = accel.partitions.view();
   const PartitionMetadata &meta = metadata();
   scene.nodeMaxOpacity = meta.nodeMaxOpacity.data();
   scene.sigma = meta.sigma.data();
@@ -93,38 +121,15 @@ SceneView Renderer::sceneView() const {
   return scene;
 }
 
-SceneView Renderer::geometryView() const {
-  SceneView scene;
-  scene.mesh = meshView_;
-  scene.bvh = bvh_.view();
-  scene.occupancy = occupancy_.view();
-  scene.tetNeighbors = tetNeighbors_.empty() ? nullptr : tetNeighbors_.data();
-  scene.partitions = partitions_.view();
-  return scene;
-}
-
-SceneSizes Renderer::sceneSizes() const {
-  SceneSizes sizes;
-  sizes.points = mesh_.points.size();
-  sizes.values = meshView_.cellCentered ? mesh_.cellCount() : mesh_.points.size();
-  sizes.bvhNodes = bvh_.nodes.size();
-  sizes.bvhCellIds = bvh_.cellIds.size();
-  sizes.partitionNodes = partitions_.nodes.size();
-  sizes.occupancyWords = occupancy_.bits.size();
-  return sizes;
-}
-
 void Renderer::prepare(Backend backend) const {
-  if (backend != Backend::Cuda || cuda_)
+  if (backend == Backend::Cpu) {
+    host();
+    return;
+  }
+  if (cuda_)
     return;
 #ifdef UVR_HAVE_CUDA
-  // Leaves of up to 8 cells: a fraction of the nodes, and so of the GPU memory, for a few more cell tests.
-  const Bvh deviceBvh = collapseBvh(bvh_, 8);
-  SceneView scene = geometryView();
-  scene.bvh = deviceBvh.view();
-  SceneSizes sizes = sceneSizes();
-  sizes.bvhNodes = deviceBvh.nodes.size();
-  cuda_ = std::make_shared<CudaRenderer>(scene, sizes);
+  cuda_ = std::make_shared<CudaRenderer>(meshView_, mesh_.points.size(), leafSize_);
   if (tf_)
     cuda_->setTransferFunction(*tf_);
 #else
@@ -132,16 +137,45 @@ void Renderer::prepare(Backend backend) const {
 #endif
 }
 
+uint32_t Renderer::partitionCount(Backend backend) const {
+  prepare(backend);
+#ifdef UVR_HAVE_CUDA
+  if (backend == Backend::Cuda)
+    return cuda_->partitionCount();
+#endif
+  return host().partitions.count();
+}
+
+double Renderer::buildMs(Backend backend) const {
+#ifdef UVR_HAVE_CUDA
+  if (backend == Backend::Cuda)
+    return cuda_ ? cuda_->buildMs() : 0.0;
+#endif
+  return backend == Backend::Cpu && host_ ? host_->buildMs : 0.0;
+}
+
 #ifdef UVR_HAVE_CUDA
 std::string Renderer::deviceName() const { return cuda_ ? std::string(cuda_->deviceName()) : std::string(); }
 size_t Renderer::deviceMemoryBytes() const { return cuda_ ? cuda_->memoryBytes() : 0; }
 size_t Renderer::deviceSceneBytes() const { return cuda_ ? cuda_->sceneBytes() : 0; }
 PartitionMetadata Renderer::deviceMetadata() const { return cuda_ ? cuda_->metadata() : PartitionMetadata{}; }
+std::vector<std::pair<std::string, double>> Renderer::deviceBuildSteps() const {
+  return cuda_ ? cuda_->buildSteps() : std::vector<std::pair<std::string, double>>{};
+}
+AccelerationCopy Renderer::deviceAcceleration() const {
+  if (!cuda_)
+    throw Error("CUDA has not been prepared");
+  return cuda_->acceleration();
+}
 #else
 std::string Renderer::deviceName() const { return {}; }
 size_t Renderer::deviceMemoryBytes() const { return 0; }
 size_t Renderer::deviceSceneBytes() const { return 0; }
 PartitionMetadata Renderer::deviceMetadata() const { return {}; }
+std::vector<std::pair<std::string, double>> Renderer::deviceBuildSteps() const { return {}; }
+AccelerationCopy Renderer::deviceAcceleration() const {
+  throw Error("this uvr was built without CUDA: use --backend cpu");
+}
 #endif
 
 Frame Renderer::render(const Camera &camera, const RenderSettings &settings) const {

@@ -14,6 +14,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace uvr {
@@ -38,7 +39,14 @@ struct RenderSettings {
 
 class CudaRenderer;
 struct PixelTarget;
-struct SceneSizes;
+
+/// The acceleration data the GPU built, copied back to the host for checks against the host's builds.
+struct AccelerationCopy {
+  Bvh bvh;
+  OccupancyGrid occupancy;
+  std::vector<uint32_t> tetNeighbors;
+  Partitions partitions;
+};
 
 struct Frame {
   Image image;
@@ -51,17 +59,19 @@ struct Frame {
 
 class Renderer {
 public:
-  /// Builds the point-location hierarchy and the partitions for field `fieldIndex` of `mesh`, which must
-  /// outlive the renderer.
+  /// Renders field `fieldIndex` of `mesh`, which must outlive the renderer. The acceleration data (tet
+  /// adjacency, point-location hierarchy, occupancy grid, partitions of up to `leafSize` cells) is built
+  /// where a backend first needs it: on the host for the CPU, on the GPU for CUDA.
   Renderer(const Mesh &mesh, int fieldIndex, uint32_t leafSize = kDefaultLeafSize);
+  ~Renderer();
 
   /// Replaces the transfer function and recomputes the partitions' metadata, on the GPU once CUDA has been
   /// prepared, else on the host; the mesh is not touched.
   void setTransferFunction(TransferFunction tf);
 
-  /// Sets up `backend` ahead of the first frame (for CUDA: uploads the scene, and the transfer function if
-  /// one is set), so that frame times exclude it. Preparing before setTransferFunction times the GPU's
-  /// update.
+  /// Sets up `backend` ahead of the first frame, so that frame times exclude it: builds the acceleration data
+  /// on the host, or uploads the mesh, builds there and uploads the transfer function if one is set.
+  /// Preparing CUDA before setTransferFunction times the GPU's update.
   void prepare(Backend backend) const;
 
   Frame render(const Camera &camera, const RenderSettings &settings) const;
@@ -73,8 +83,16 @@ public:
   size_t deviceMemoryBytes() const;
   size_t deviceSceneBytes() const; ///< without the frame buffers
 
-  const Partitions &partitions() const { return partitions_; }
-  const Bvh &bvh() const { return bvh_; }
+  /// The host's partitions, built on first use.
+  const Partitions &partitions() const;
+  uint32_t partitionCount(Backend backend) const;
+  /// Milliseconds the acceleration build for `backend` took (on the GPU for CUDA, the mesh's upload
+  /// excluded); 0 before it was prepared.
+  double buildMs(Backend backend) const;
+  /// The GPU build's steps and their milliseconds; empty until CUDA has been prepared.
+  std::vector<std::pair<std::string, double>> deviceBuildSteps() const;
+  /// What the GPU built, copied back; needs CUDA prepared.
+  AccelerationCopy deviceAcceleration() const;
   /// The metadata on the host: after an update on the GPU, computed there on first use.
   const PartitionMetadata &metadata() const;
   /// The metadata the GPU computed, copied back; empty until CUDA has been prepared.
@@ -83,25 +101,21 @@ public:
   uint32_t transparentPartitions() const { return transparentPartitions_; }
   /// The current transfer function; throws uvr::Error before the first setTransferFunction.
   const TransferFunction &transferFunction() const;
-  double buildMs() const { return buildMs_; }
   double tfUpdateMs() const { return tfUpdateMs_; }
 
 private:
-  SceneView sceneView() const;    ///< all a ray reads on the host; needs the transfer function
-  SceneView geometryView() const; ///< the part that does not depend on the transfer function
-  SceneSizes sceneSizes() const;
+  struct HostAcceleration;
+  const HostAcceleration &host() const; ///< built on first use
+  SceneView sceneView() const;          ///< all a ray reads on the host; needs the transfer function
 
   const Mesh &mesh_;
   MeshView meshView_;
-  Bvh bvh_;
-  OccupancyGrid occupancy_;
-  std::vector<uint32_t> tetNeighbors_;
-  Partitions partitions_;
+  uint32_t leafSize_;
+  mutable std::unique_ptr<HostAcceleration> host_;
   std::optional<TransferFunction> tf_;
   mutable PartitionMetadata metadata_;
   mutable bool metadataCurrent_ = false; // false after an update that only the GPU made
   uint32_t transparentPartitions_ = 0;
-  double buildMs_ = 0.0;
   double tfUpdateMs_ = 0.0;
   mutable std::shared_ptr<CudaRenderer> cuda_; // created on first use of the CUDA backend
 };

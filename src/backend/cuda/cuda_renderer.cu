@@ -1,17 +1,20 @@
 #include "backend/cuda/cuda_renderer.h"
 
+#include "backend/cuda/cuda_build.cuh"
+#include "backend/cuda/device_buffer.cuh"
 #include "core/error.h"
+#include "core/timer.h"
 
 #include <cub/block/block_reduce.cuh>
 #include <cuda_runtime.h>
 
 #include <string>
+#include <type_traits>
 #include <vector>
 
 namespace uvr {
-namespace {
 
-void check(cudaError_t status, const char *call, const char *file, int line) {
+void checkCuda(cudaError_t status, const char *call, const char *file, int line) {
   if (status == cudaSuccess)
     return;
   std::string what = std::string("CUDA: ") + call + " failed at " + file + ":" + std::to_string(line) + ": " +
@@ -23,52 +26,15 @@ void check(cudaError_t status, const char *call, const char *file, int line) {
   }
   throw Error(what);
 }
-#define UVR_CUDA_CHECK(call) check((call), #call, __FILE__, __LINE__)
 
-/// One device allocation, freed with its owner.
-template <typename T> class DeviceBuffer {
-public:
-  DeviceBuffer() = default;
-  ~DeviceBuffer() { cudaFree(data_); }
-  DeviceBuffer(const DeviceBuffer &) = delete;
-  DeviceBuffer &operator=(const DeviceBuffer &) = delete;
+void throwOutOfMemory(size_t bytes) {
+  size_t free = 0, total = 0;
+  cudaMemGetInfo(&free, &total);
+  throw Error("GPU out of memory: asked for " + std::to_string(bytes) + " bytes, " + std::to_string(free) +
+              " of " + std::to_string(total) + " free");
+}
 
-  void resize(size_t count) {
-    if (count == count_)
-      return;
-    cudaFree(data_);
-    data_ = nullptr;
-    count_ = 0;
-    if (count == 0)
-      return;
-    const cudaError_t status = cudaMalloc(&data_, count * sizeof(T));
-    if (status != cudaSuccess) {
-      cudaGetLastError(); // clear the sticky state before reporting
-      size_t free = 0, total = 0;
-      cudaMemGetInfo(&free, &total);
-      throw Error("GPU out of memory: asked for " + std::to_string(count * sizeof(T)) + " bytes, " +
-                  std::to_string(free) + " of " + std::to_string(total) + " free");
-    }
-    count_ = count;
-  }
-  /// Copies `count` elements from host memory (allocating as needed); returns the device pointer.
-  T *upload(const T *host, size_t count) {
-    resize(count);
-    if (count > 0)
-      UVR_CUDA_CHECK(cudaMemcpy(data_, host, count * sizeof(T), cudaMemcpyHostToDevice));
-    return data_;
-  }
-  void download(T *host, size_t count) const {
-    if (count > 0)
-      UVR_CUDA_CHECK(cudaMemcpy(host, data_, count * sizeof(T), cudaMemcpyDeviceToHost));
-  }
-  T *data() const { return data_; }
-  size_t bytes() const { return count_ * sizeof(T); }
-
-private:
-  T *data_ = nullptr;
-  size_t count_ = 0;
-};
+namespace {
 
 // 16x8 pixels per block. Asking for 5 resident blocks per SM caps the kernel at 96 registers (156 unbounded):
 // on an H200, reference frames 12-18 % faster, full frames 0-9 %, for a few spills to L1.
@@ -159,24 +125,20 @@ __global__ void normalizeSigmaKernel(uint32_t count, const MetadataTotals *total
                                __uint_as_float(totals->highestVariance));
 }
 
-unsigned blocksFor(uint64_t threads, int block) { return unsigned((threads + uint64_t(block) - 1) / block); }
-
 } // namespace
 
 struct CudaRenderer::Impl {
   std::string deviceName;
   SceneView scene; // device pointers
   DeviceBuffer<Vec3f> points;
-  DeviceBuffer<uint32_t> tets, pyramids, wedges, hexes, tetNeighbors, bvhCellIds;
-  DeviceBuffer<float> values, nodeMaxOpacity, sigma, valueMin, valueMax;
+  DeviceBuffer<uint32_t> tets, pyramids, wedges, hexes;
+  DeviceBuffer<float> values, nodeMaxOpacity, sigma;
+  DeviceAcceleration accel;
+  double buildMs = 0.0;
   DeviceBuffer<uint32_t> kdParents, partitionNodes;
   DeviceBuffer<MetadataTotals> totals;
   DeviceBuffer<double> tfPrefixSum, tfPrefixSquares;
   DeviceBuffer<float> tfOpacityMax;
-  DeviceBuffer<BvhNode> bvhNodes;
-  DeviceBuffer<KdNode> kdNodes;
-  DeviceBuffer<Box3f> nodeBounds;
-  DeviceBuffer<uint64_t> occupancy;
   DeviceBuffer<Vec4f> tfTable;
   DeviceBuffer<uint8_t> rgb;
   DeviceBuffer<float> opacity;
@@ -191,7 +153,8 @@ struct CudaRenderer::Impl {
   }
 };
 
-CudaRenderer::CudaRenderer(const SceneView &host, const SceneSizes &sizes) : impl_(std::make_unique<Impl>()) {
+CudaRenderer::CudaRenderer(const MeshView &mesh, uint64_t pointCount, uint32_t leafSize)
+    : impl_(std::make_unique<Impl>()) {
   int devices = 0;
   const cudaError_t status = cudaGetDeviceCount(&devices);
   if (status != cudaSuccess || devices == 0)
@@ -205,32 +168,33 @@ CudaRenderer::CudaRenderer(const SceneView &host, const SceneSizes &sizes) : imp
   UVR_CUDA_CHECK(cudaEventCreate(&d.kernelStart));
   UVR_CUDA_CHECK(cudaEventCreate(&d.kernelEnd));
   SceneView &scene = d.scene;
-  scene = host;
-  const MeshView &mesh = host.mesh;
-  scene.mesh.points = d.points.upload(mesh.points, sizes.points);
+  scene.mesh = mesh;
+  scene.mesh.points = d.points.upload(mesh.points, pointCount);
   scene.mesh.tets = d.tets.upload(mesh.tets, 4 * mesh.tetCount);
   scene.mesh.pyramids = d.pyramids.upload(mesh.pyramids, 5 * mesh.pyramidCount);
   scene.mesh.wedges = d.wedges.upload(mesh.wedges, 6 * mesh.wedgeCount);
   scene.mesh.hexes = d.hexes.upload(mesh.hexes, 8 * mesh.hexCount);
-  scene.mesh.values = d.values.upload(mesh.values, sizes.values);
-  scene.tetNeighbors =
-      host.tetNeighbors ? d.tetNeighbors.upload(host.tetNeighbors, 4 * mesh.tetCount) : nullptr;
-  scene.bvh.nodes = d.bvhNodes.upload(host.bvh.nodes, sizes.bvhNodes);
-  scene.bvh.cellIds = d.bvhCellIds.upload(host.bvh.cellIds, sizes.bvhCellIds);
-  scene.occupancy.bits =
-      host.occupancy.bits ? d.occupancy.upload(host.occupancy.bits, sizes.occupancyWords) : nullptr;
-  scene.partitions.nodes = d.kdNodes.upload(host.partitions.nodes, sizes.partitionNodes);
-  scene.partitions.nodeBounds = d.nodeBounds.upload(host.partitions.nodeBounds, sizes.partitionNodes);
-  const uint32_t partitionCount = host.partitions.count;
-  scene.partitions.valueMin = d.valueMin.upload(host.partitions.valueMin, partitionCount);
-  scene.partitions.valueMax = d.valueMax.upload(host.partitions.valueMax, partitionCount);
-  d.kdParents.resize(sizes.partitionNodes);
+  scene.mesh.values =
+      mesh.values ? d.values.upload(mesh.values, mesh.cellCentered ? mesh.cellCount() : pointCount) : nullptr;
+
+  const Timer timer;
+  DeviceAcceleration &accel = d.accel;
+  buildOnDevice(scene.mesh, pointCount, leafSize, accel);
+  d.buildMs = timer.milliseconds();
+  scene.tetNeighbors = accel.tetNeighbors.size() > 0 ? accel.tetNeighbors.data() : nullptr;
+  scene.bvh = {accel.bvhNodes.data(), accel.bvhCellIds.data()};
+  scene.occupancy = accel.occupancy;
+  const uint32_t nodeCount = uint32_t(accel.kdNodes.size()), partitionCount = accel.partitionCount;
+  scene.partitions = {accel.kdNodes.data(),  accel.nodeBounds.data(), accel.valueMin.data(),
+                      accel.valueMax.data(), accel.rootBounds,        partitionCount};
+
+  d.kdParents.resize(nodeCount);
   d.partitionNodes.resize(partitionCount);
-  linkNodesKernel<<<blocksFor(sizes.partitionNodes, kMetadataBlock), kMetadataBlock>>>(
-      scene.partitions.nodes, uint32_t(sizes.partitionNodes), d.kdParents.data(), d.partitionNodes.data());
+  linkNodesKernel<<<blocksFor(nodeCount, kMetadataBlock), kMetadataBlock>>>(
+      scene.partitions.nodes, nodeCount, d.kdParents.data(), d.partitionNodes.data());
   UVR_CUDA_CHECK(cudaGetLastError());
   d.sigma.resize(partitionCount);
-  d.nodeMaxOpacity.resize(sizes.partitionNodes);
+  d.nodeMaxOpacity.resize(nodeCount);
   d.totals.resize(1);
   scene.sigma = d.sigma.data();
   scene.nodeMaxOpacity = d.nodeMaxOpacity.data();
@@ -318,11 +282,49 @@ size_t CudaRenderer::memoryBytes() const {
 size_t CudaRenderer::sceneBytes() const {
   const Impl &d = *impl_;
   return d.points.bytes() + d.tets.bytes() + d.pyramids.bytes() + d.wedges.bytes() + d.hexes.bytes() +
-         d.tetNeighbors.bytes() + d.bvhCellIds.bytes() + d.values.bytes() + d.nodeMaxOpacity.bytes() +
-         d.sigma.bytes() + d.bvhNodes.bytes() + d.kdNodes.bytes() + d.nodeBounds.bytes() +
-         d.occupancy.bytes() + d.valueMin.bytes() + d.valueMax.bytes() + d.kdParents.bytes() +
-         d.partitionNodes.bytes() + d.totals.bytes() + d.tfTable.bytes() + d.tfPrefixSum.bytes() +
-         d.tfPrefixSquares.bytes() + d.tfOpacityMax.bytes();
+         d.values.bytes() + d.accel.bytes() + d.nodeMaxOpacity.bytes() + d.sigma.bytes() +
+         d.kdParents.bytes() + d.partitionNodes.bytes() + d.totals.bytes() + d.tfTable.bytes() +
+         d.tfPrefixSum.bytes() + d.tfPrefixSquares.bytes() + d.tfOpacityMax.bytes();
+}
+
+uint32_t CudaRenderer::partitionCount() const { return impl_->scene.partitions.count; }
+double CudaRenderer::buildMs() const { return impl_->buildMs; }
+const std::vector<std::pair<std::string, double>> &CudaRenderer::buildSteps() const {
+  return impl_->accel.stepMs;
+}
+
+AccelerationCopy CudaRenderer::acceleration() const {
+  const DeviceAcceleration &accel = impl_->accel;
+  auto copy = [](const auto &buffer) {
+    std::vector<std::remove_cv_t<std::remove_pointer_t<decltype(buffer.data())>>> host(buffer.size());
+    buffer.download(host.data(), host.size());
+    return host;
+  };
+  AccelerationCopy out;
+  out.bvh.nodes = copy(accel.bvhNodes);
+  out.bvh.cellIds = copy(accel.bvhCellIds);
+  out.tetNeighbors = copy(accel.tetNeighbors);
+  OccupancyGrid &grid = out.occupancy;
+  grid.bits = copy(accel.occupancyBits);
+  grid.origin = accel.occupancy.origin;
+  grid.voxelsPerUnit = accel.occupancy.voxelsPerUnit;
+  grid.voxelSize = accel.voxelSize;
+  grid.nx = accel.occupancy.nx;
+  grid.ny = accel.occupancy.ny;
+  grid.nz = accel.occupancy.nz;
+  Partitions &parts = out.partitions;
+  parts.nodes = copy(accel.kdNodes);
+  parts.nodeBounds = copy(accel.nodeBounds);
+  parts.valueMin = copy(accel.valueMin);
+  parts.valueMax = copy(accel.valueMax);
+  const std::vector<unsigned long long> counts = copy(accel.cellCounts);
+  parts.cellCounts.assign(counts.begin(), counts.end());
+  parts.rootBounds = accel.rootBounds;
+  parts.bounds.resize(accel.partitionCount);
+  for (size_t node = 0; node < parts.nodes.size(); ++node)
+    if (parts.nodes[node].axis == KdNode::kLeaf)
+      parts.bounds[parts.nodes[node].child] = parts.nodeBounds[node];
+  return out;
 }
 
 const std::string &CudaRenderer::deviceName() const { return impl_->deviceName; }

@@ -1,29 +1,28 @@
-// The CUDA backend's host side: device copies of everything a ray reads, uploaded once per mesh; on each
-// transfer-function change the table is uploaded and the partitions' metadata recomputed on the GPU. A plain
-// C++ header: no CUDA types leak out.
+// The CUDA backend's host side: the mesh uploaded once and its acceleration data built on the GPU; on each
+// transfer-function change the table is uploaded and the partitions' metadata recomputed there. A plain C++
+// header: no CUDA types leak out.
 #pragma once
 
 #include "render/camera.h"
 #include "render/integrator.h"
 #include "render/pixel.h"
+#include "render/renderer.h"
 
 #include <cstddef>
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace uvr {
 
-/// Element counts of the arrays a SceneView points to, so that they can be copied.
-struct SceneSizes {
-  uint64_t points = 0, values = 0, bvhNodes = 0, bvhCellIds = 0, partitionNodes = 0, occupancyWords = 0;
-};
-
 class CudaRenderer {
 public:
-  /// Uploads the scene to the current GPU (all but the transfer function and the metadata it sets); throws
-  /// uvr::Error when there is none or memory runs out.
-  CudaRenderer(const SceneView &scene, const SceneSizes &sizes);
+  /// Uploads `mesh` (host pointers, `pointCount` points) to the current GPU and builds the acceleration data
+  /// there, with partitions of at most `leafSize` cells; throws uvr::Error when there is no GPU or memory
+  /// runs out.
+  CudaRenderer(const MeshView &mesh, uint64_t pointCount, uint32_t leafSize);
   ~CudaRenderer();
   CudaRenderer(const CudaRenderer &) = delete;
   CudaRenderer &operator=(const CudaRenderer &) = delete;
@@ -33,6 +32,12 @@ public:
   uint32_t setTransferFunction(const TransferFunction &tf);
   /// Copies the metadata of the last setTransferFunction back, for checks against the host's.
   PartitionMetadata metadata() const;
+  AccelerationCopy acceleration() const;
+
+  uint32_t partitionCount() const;
+  /// Milliseconds the build on the GPU took, in all and per step (upload of the mesh excluded).
+  double buildMs() const;
+  const std::vector<std::pair<std::string, double>> &buildSteps() const;
 
   /// Renders into `target`'s host buffers (width x height pixels); returns the milliseconds the kernel took
   /// on the GPU, without the copies.

@@ -1,0 +1,634 @@
+#include "backend/cuda/cuda_build.cuh"
+
+#include "accel/occupancy_build.h"
+#include "core/morton.h"
+#include "core/progress.h"
+#include "core/timer.h"
+#include "mesh/cell.h"
+#include "mesh/tet_neighbors.h"
+
+#include <cub/device/device_radix_sort.cuh>
+#include <cub/device/device_scan.cuh>
+
+#include <algorithm>
+#include <cstring>
+
+namespace uvr {
+namespace {
+
+constexpr int kBlock = 256;
+constexpr uint32_t kSettled = 0xffffffffu; // a position whose cells have reached their leaf
+
+/// Floats as unsigned integers of the same order, for integer atomics and radix sorts.
+UVR_HOST_DEVICE inline uint32_t orderedBits(float f) {
+  uint32_t u;
+  memcpy(&u, &f, sizeof u);
+  return (u & 0x80000000u) ? ~u : (u | 0x80000000u);
+}
+
+UVR_HOST_DEVICE inline float fromOrderedBits(uint32_t u) {
+  u = (u & 0x80000000u) ? (u & 0x7fffffffu) : ~u;
+  float f;
+  memcpy(&f, &u, sizeof f);
+  return f;
+}
+
+/// A box reduced by integer atomics on ordered bits; starts empty.
+struct AtomicBox {
+  uint32_t lower[3], upper[3];
+
+  static AtomicBox empty() {
+    const uint32_t inf = orderedBits(INFINITY), negInf = orderedBits(-INFINITY);
+    return {{inf, inf, inf}, {negInf, negInf, negInf}};
+  }
+  __device__ void extend(const Box3f &box) {
+    const float lo[3] = {box.lower.x, box.lower.y, box.lower.z},
+                hi[3] = {box.upper.x, box.upper.y, box.upper.z};
+    for (int k = 0; k < 3; ++k) {
+      atomicMin(&lower[k], orderedBits(lo[k]));
+      atomicMax(&upper[k], orderedBits(hi[k]));
+    }
+  }
+  UVR_HOST_DEVICE Box3f box() const {
+    return {{fromOrderedBits(lower[0]), fromOrderedBits(lower[1]), fromOrderedBits(lower[2])},
+            {fromOrderedBits(upper[0]), fromOrderedBits(upper[1]), fromOrderedBits(upper[2])}};
+  }
+};
+
+__device__ inline uint64_t globalIndex() { return uint64_t(blockIdx.x) * blockDim.x + threadIdx.x; }
+
+/// Temporary storage for cub's device-wide algorithms, kept across calls.
+class CubScratch {
+public:
+  template <typename Run> void run(Run &&algorithm) {
+    size_t bytes = 0;
+    UVR_CUDA_CHECK(algorithm(nullptr, bytes));
+    storage_.grow(bytes, 0);
+    UVR_CUDA_CHECK(algorithm(storage_.data(), bytes));
+  }
+
+private:
+  DeviceBuffer<uint8_t> storage_;
+};
+
+template <typename T> T downloadOne(const T *device) {
+  T value;
+  UVR_CUDA_CHECK(cudaMemcpy(&value, device, sizeof(T), cudaMemcpyDeviceToHost));
+  return value;
+}
+
+// ---- Cell boxes
+// ---------------------------------------------------------------------------------------------
+
+/// The centroid of every cell (partitionCentroid) and, reduced warp by warp into `bounds`, the mesh's box.
+__global__ void centroidsKernel(MeshView mesh, uint64_t cells, Vec3f *centroids, AtomicBox *bounds) {
+  Box3f local;
+  for (uint64_t c = globalIndex(); c < cells; c += uint64_t(gridDim.x) * blockDim.x) {
+    const Box3f box = cellBounds(mesh, c);
+    centroids[c] = partitionCentroid(box);
+    local.extend(box);
+  }
+  float lo[3] = {local.lower.x, local.lower.y, local.lower.z},
+        hi[3] = {local.upper.x, local.upper.y, local.upper.z};
+  for (int offset = 16; offset > 0; offset /= 2)
+    for (int k = 0; k < 3; ++k) {
+      lo[k] = fminf(lo[k], __shfl_xor_sync(0xffffffffu, lo[k], offset));
+      hi[k] = fmaxf(hi[k], __shfl_xor_sync(0xffffffffu, hi[k], offset));
+    }
+  if (threadIdx.x % 32 == 0)
+    bounds->extend({{lo[0], lo[1], lo[2]}, {hi[0], hi[1], hi[2]}});
+}
+
+// ---- Tet adjacency
+// ------------------------------------------------------------------------------------------
+
+__global__ void countIncidentKernel(const uint32_t *tets, uint64_t entries, unsigned long long *counts) {
+  const uint64_t i = globalIndex();
+  if (i < entries)
+    atomicAdd(counts + tets[i], 1ull);
+}
+
+__global__ void fillIncidentKernel(const uint32_t *tets, uint64_t entries, unsigned long long *next,
+                                   uint32_t *incident) {
+  const uint64_t i = globalIndex();
+  if (i < entries)
+    incident[atomicAdd(next + tets[i], 1ull)] = uint32_t(i / 4);
+}
+
+__global__ void tetNeighborsKernel(const uint32_t *tets, uint64_t tetCount, const uint64_t *first,
+                                   const uint32_t *incident, uint32_t *neighbors) {
+  const uint64_t t = globalIndex();
+  if (t >= tetCount)
+    return;
+  uint32_t across[4];
+  findTetNeighbors(tets, t, first, incident, across);
+  for (int i = 0; i < 4; ++i)
+    neighbors[4 * t + i] = across[i];
+}
+
+// ---- Occupancy grid
+// -----------------------------------------------------------------------------------------
+
+__global__ void occupancyKernel(MeshView mesh, uint64_t cells, OccupancyView grid, Vec3f voxelSize,
+                                unsigned long long *bits) {
+  const uint64_t c = globalIndex();
+  if (c >= cells)
+    return;
+  markCell(mesh, c, grid, voxelSize, [&](uint64_t w, uint64_t mask) {
+    if ((bits[w] & mask) != mask)
+      atomicOr(bits + w, (unsigned long long)mask);
+  });
+}
+
+// ---- Point-location BVH
+// -------------------------------------------------------------------------------------
+
+__global__ void mortonKernel(const Vec3f *centroids, uint64_t cells, Vec3f origin, Vec3f scale,
+                             uint32_t *codes, uint32_t *ids) {
+  const uint64_t c = globalIndex();
+  if (c >= cells)
+    return;
+  const Vec3f p = centroids[c] - origin;
+  auto cell = [](float v) { return uint32_t(fminf(fmaxf(v, 0.f), 1023.f)); };
+  codes[c] = uint32_t(mortonCode(cell(p.x * scale.x), cell(p.y * scale.y), cell(p.z * scale.z)));
+  ids[c] = uint32_t(c);
+}
+
+/// The leaves, level `depth` of a complete tree: leaf j lists the cells j * cells / 2^depth onwards.
+__global__ void bvhLeavesKernel(MeshView mesh, const uint32_t *cellIds, uint64_t cells, int depth,
+                                BvhNode *nodes) {
+  const uint64_t j = globalIndex();
+  if (j >= (uint64_t(1) << depth))
+    return;
+  const uint64_t begin = (j * cells) >> depth, end = ((j + 1) * cells) >> depth;
+  Box3f bounds;
+  for (uint64_t i = begin; i < end; ++i)
+    bounds.extend(cellBounds(mesh, cellIds[i]));
+  nodes[(uint64_t(1) << depth) - 1 + j] = {bounds, uint32_t(begin), uint32_t(end - begin)};
+}
+
+__global__ void bvhLevelKernel(BvhNode *nodes, int level) {
+  const uint64_t j = globalIndex();
+  if (j >= (uint64_t(1) << level))
+    return;
+  const uint64_t node = (uint64_t(1) << level) - 1 + j, left = 2 * node + 1;
+  Box3f bounds = nodes[left].bounds;
+  bounds.extend(nodes[left + 1].bounds);
+  nodes[node] = {bounds, uint32_t(left), 0};
+}
+
+// ---- Partitions: the median-split KD-tree, one level at a time
+// ----------------------------------------------
+//
+// The cells are kept in three lists, each sorted by centroid along one axis (ties by cell index). A node's
+// cells occupy the same positions in all three; its median along an axis is the middle of that axis's list,
+// and splitting it is a stable partition of each list by the side its cells fall on, as in the host's
+// nth_element with the same order.
+
+struct LevelNode {
+  uint32_t start, count; ///< positions in the sorted lists
+  Box3f space;           ///< the node's cell of space
+};
+
+__global__ void axisKeysKernel(const Vec3f *centroids, uint64_t cells, int axis, uint32_t *keys,
+                               uint32_t *ids) {
+  const uint64_t c = globalIndex();
+  if (c >= cells)
+    return;
+  keys[c] = orderedBits(centroids[c][axis]);
+  ids[c] = uint32_t(c);
+}
+
+struct SortedLists {
+  const uint32_t *axis[3];
+};
+
+/// Decides per node of the level whether and where it splits, as the host's TreeBuilder::split.
+__global__ void classifyKernel(const LevelNode *level, uint32_t count, SortedLists lists,
+                               const Vec3f *centroids, uint32_t leafSize, int depth, KdNode *decisions,
+                               uint32_t *splits) {
+  const uint64_t i = globalIndex();
+  if (i >= count)
+    return;
+  const LevelNode node = level[i];
+  KdNode decision;
+  bool split = false;
+  if (node.count > leafSize && depth < kMaxPartitionDepth) {
+    Vec3f extent;
+    for (int a = 0; a < 3; ++a)
+      extent[a] =
+          centroids[lists.axis[a][node.start + node.count - 1]][a] - centroids[lists.axis[a][node.start]][a];
+    const int axis = widestAxis(extent);
+    decision = {centroids[lists.axis[axis][node.start + node.count / 2]][axis], uint32_t(axis), 0};
+    split = decision.split > node.space.lower[axis] && decision.split < node.space.upper[axis];
+  }
+  decisions[i] = decision;
+  splits[i] = split;
+}
+
+/// Writes the level's nodes: inner ones with their children (the next level, in order), leaves with their
+/// partition index and cell of space.
+__global__ void emitKernel(const LevelNode *level, uint32_t count, const KdNode *decisions,
+                           const uint32_t *splits, const uint32_t *splitRank, uint32_t levelBase,
+                           uint32_t leavesBefore, KdNode *nodes, LevelNode *next, Box3f *leafSpace) {
+  const uint64_t i = globalIndex();
+  if (i >= count)
+    return;
+  const LevelNode node = level[i];
+  if (splits[i]) {
+    const uint32_t rank = splitRank[i];
+    KdNode inner = decisions[i];
+    inner.child = levelBase + count + 2 * rank;
+    nodes[levelBase + i] = inner;
+    Box3f below = node.space, above = node.space;
+    below.upper[int(inner.axis)] = inner.split;
+    above.lower[int(inner.axis)] = inner.split;
+    const uint32_t half = node.count / 2;
+    next[2 * rank] = {node.start, half, below};
+    next[2 * rank + 1] = {node.start + half, node.count - half, above};
+  } else {
+    const uint32_t leaf = leavesBefore + uint32_t(i) - splitRank[i];
+    nodes[levelBase + i] = {0.f, KdNode::kLeaf, leaf};
+    leafSpace[leaf] = node.space;
+  }
+}
+
+/// Which side of its node's split each cell goes to: the upper half of the split axis's list goes above.
+__global__ void sideKernel(uint64_t cells, const uint32_t *positionNode, const LevelNode *level,
+                           const KdNode *decisions, const uint32_t *splits, SortedLists lists,
+                           uint8_t *above) {
+  const uint64_t p = globalIndex();
+  if (p >= cells)
+    return;
+  const uint32_t s = positionNode[p];
+  if (s == kSettled || !splits[s])
+    return;
+  const LevelNode node = level[s];
+  above[lists.axis[decisions[s].axis][p]] = p - node.start >= node.count / 2;
+}
+
+__global__ void aboveFlagsKernel(uint64_t cells, const uint32_t *positionNode, const uint32_t *splits,
+                                 const uint32_t *list, const uint8_t *above, uint32_t *flags) {
+  const uint64_t p = globalIndex();
+  if (p >= cells)
+    return;
+  const uint32_t s = positionNode[p];
+  flags[p] = s != kSettled && splits[s] ? above[list[p]] : 0u;
+}
+
+/// The stable partition of one list: below before above within each splitting node, order kept on each side.
+__global__ void partitionListKernel(uint64_t cells, const uint32_t *positionNode, const LevelNode *level,
+                                    const uint32_t *splits, const uint32_t *list, const uint8_t *above,
+                                    const uint32_t *aboveBefore, uint32_t *out) {
+  const uint64_t p = globalIndex();
+  if (p >= cells)
+    return;
+  const uint32_t s = positionNode[p], cell = list[p];
+  if (s == kSettled || !splits[s]) {
+    out[p] = cell;
+    return;
+  }
+  const LevelNode node = level[s];
+  const uint32_t ones = aboveBefore[p] - aboveBefore[node.start];
+  out[above[cell] ? node.start + node.count / 2 + ones : uint32_t(p) - ones] = cell;
+}
+
+__global__ void advancePositionsKernel(uint64_t cells, uint32_t *positionNode, const LevelNode *level,
+                                       const uint32_t *splits, const uint32_t *splitRank) {
+  const uint64_t p = globalIndex();
+  if (p >= cells)
+    return;
+  const uint32_t s = positionNode[p];
+  if (s == kSettled)
+    return;
+  if (!splits[s]) {
+    positionNode[p] = kSettled;
+    return;
+  }
+  const LevelNode node = level[s];
+  positionNode[p] = 2 * splitRank[s] + (p - node.start >= node.count / 2 ? 1u : 0u);
+}
+
+/// What a partition gathers from the cells whose boxes touch it, as ordered bits.
+struct LeafAccumulator {
+  AtomicBox cells;
+  uint32_t valueMin, valueMax;
+  unsigned long long count;
+};
+
+__global__ void clearLeavesKernel(uint32_t leafCount, LeafAccumulator empty, LeafAccumulator *leaves) {
+  const uint64_t i = globalIndex();
+  if (i < leafCount)
+    leaves[i] = empty;
+}
+
+__global__ void gatherLeavesKernel(MeshView mesh, uint64_t cells, const KdNode *nodes,
+                                   LeafAccumulator *leaves) {
+  const uint64_t c = globalIndex();
+  if (c >= cells)
+    return;
+  const Box3f box = cellBounds(mesh, c);
+  float lo, hi;
+  cellValueRange(mesh, c, lo, hi);
+  forEachLeafTouching(nodes, box, [&](uint32_t leaf) {
+    LeafAccumulator &acc = leaves[leaf];
+    acc.cells.extend(box);
+    atomicMin(&acc.valueMin, orderedBits(lo));
+    atomicMax(&acc.valueMax, orderedBits(hi));
+    atomicAdd(&acc.count, 1ull);
+  });
+}
+
+/// Each partition's box shrunk to its cells within its cell of space, padded as the host pads it.
+__global__ void finishLeavesKernel(uint32_t leafCount, const LeafAccumulator *leaves, const Box3f *leafSpace,
+                                   float pad, Box3f *shrunk, float *valueMin, float *valueMax,
+                                   unsigned long long *counts) {
+  const uint64_t i = globalIndex();
+  if (i >= leafCount)
+    return;
+  const LeafAccumulator acc = leaves[i];
+  Box3f box = intersection(acc.cells.box(), leafSpace[i]);
+  box.lower = box.lower - Vec3f{pad, pad, pad};
+  box.upper = box.upper + Vec3f{pad, pad, pad};
+  shrunk[i] = box;
+  valueMin[i] = fromOrderedBits(acc.valueMin);
+  valueMax[i] = fromOrderedBits(acc.valueMax);
+  counts[i] = acc.count;
+}
+
+/// Node boxes of one level, from the level below (children come after their parents).
+__global__ void nodeBoundsKernel(uint32_t first, uint32_t count, const KdNode *nodes, const Box3f *shrunk,
+                                 Box3f *nodeBounds) {
+  const uint64_t i = globalIndex();
+  if (i >= count)
+    return;
+  const uint32_t node = first + uint32_t(i);
+  const KdNode n = nodes[node];
+  if (n.axis == KdNode::kLeaf) {
+    nodeBounds[node] = shrunk[n.child];
+  } else {
+    Box3f box = nodeBounds[n.child];
+    box.extend(nodeBounds[n.child + 1]);
+    nodeBounds[node] = box;
+  }
+}
+
+class DeviceBuilder {
+public:
+  DeviceBuilder(const MeshView &mesh, uint64_t pointCount, uint32_t leafSize, DeviceAcceleration &out)
+      : mesh_(mesh), cells_(mesh.cellCount()), pointCount_(pointCount), leafSize_(leafSize), out_(out) {}
+
+  void build() {
+    if (cells_ == 0)
+      throw Error("the mesh has no volume cells");
+    if (cells_ >= UINT32_MAX)
+      throw Error("more than 2^32 - 1 cells are not supported by the GPU build");
+    if (leafSize_ == 0)
+      throw Error("the partition leaf size must be at least 1");
+    Progress progress("building acceleration on the GPU", 5);
+    step(
+        "cell centroids", [&] { centroids(); }, progress);
+    step(
+        "tet adjacency", [&] { tetAdjacency(); }, progress);
+    step(
+        "occupancy grid", [&] { occupancy(); }, progress);
+    step(
+        "point-location hierarchy", [&] { bvh(); }, progress);
+    step(
+        "partitions", [&] { partitions(); }, progress);
+    progress.finish();
+  }
+
+private:
+  template <typename Work> void step(const char *name, Work &&work, Progress &progress) {
+    const Timer timer;
+    work();
+    UVR_CUDA_CHECK(cudaGetLastError());
+    UVR_CUDA_CHECK(cudaDeviceSynchronize()); // a fault in the step surfaces here
+    out_.stepMs.emplace_back(name, timer.milliseconds());
+    progress.advance(1);
+  }
+
+  unsigned cellBlocks() const { return blocksFor(cells_, kBlock); }
+
+  void centroids() {
+    centroids_.resize(cells_);
+    DeviceBuffer<AtomicBox> bounds;
+    const AtomicBox empty = AtomicBox::empty();
+    bounds.upload(&empty, 1);
+    const unsigned blocks = std::min(cellBlocks(), 4096u); // each thread reduces several cells first
+    centroidsKernel<<<blocks, kBlock>>>(mesh_, cells_, centroids_.data(), bounds.data());
+    UVR_CUDA_CHECK(cudaGetLastError());
+    meshBounds_ = downloadOne(bounds.data()).box();
+  }
+
+  void tetAdjacency() {
+    const uint64_t tets = mesh_.tetCount, entries = 4 * tets;
+    if (tets == 0)
+      return;
+    DeviceBuffer<uint64_t> counts, first;
+    counts.resize(pointCount_);
+    first.resize(pointCount_ + 1);
+    UVR_CUDA_CHECK(cudaMemset(counts.data(), 0, counts.bytes()));
+    UVR_CUDA_CHECK(cudaMemset(first.data(), 0, sizeof(uint64_t)));
+    auto *counters = reinterpret_cast<unsigned long long *>(counts.data());
+    countIncidentKernel<<<blocksFor(entries, kBlock), kBlock>>>(mesh_.tets, entries, counters);
+    UVR_CUDA_CHECK(cudaGetLastError());
+    scratch_.run([&](void *storage, size_t &bytes) {
+      return cub::DeviceScan::InclusiveSum(storage, bytes, counts.data(), first.data() + 1,
+                                           int64_t(pointCount_));
+    });
+    // Each point's next free slot in its row: the row starts, shifted by one.
+    UVR_CUDA_CHECK(cudaMemcpy(counts.data(), first.data(), counts.bytes(), cudaMemcpyDeviceToDevice));
+    DeviceBuffer<uint32_t> incident;
+    incident.resize(entries);
+    fillIncidentKernel<<<blocksFor(entries, kBlock), kBlock>>>(mesh_.tets, entries, counters,
+                                                               incident.data());
+    UVR_CUDA_CHECK(cudaGetLastError());
+    out_.tetNeighbors.resize(entries);
+    tetNeighborsKernel<<<blocksFor(tets, kBlock), kBlock>>>(mesh_.tets, tets, first.data(), incident.data(),
+                                                            out_.tetNeighbors.data());
+  }
+
+  void occupancy() {
+    const OccupancyGrid shape = occupancyShape(meshBounds_, cells_, kDefaultVoxelsPerCell);
+    out_.occupancyBits.resize(shape.wordCount());
+    UVR_CUDA_CHECK(cudaMemset(out_.occupancyBits.data(), 0, out_.occupancyBits.bytes()));
+    out_.occupancy = shape.view();
+    out_.occupancy.bits = out_.occupancyBits.data();
+    out_.voxelSize = shape.voxelSize;
+    occupancyKernel<<<cellBlocks(), kBlock>>>(
+        mesh_, cells_, out_.occupancy, shape.voxelSize,
+        reinterpret_cast<unsigned long long *>(out_.occupancyBits.data()));
+  }
+
+  /// A complete binary tree over the cells in Morton order of their centroids, cut into leaves of 4 to 8
+  /// consecutive cells: no search for splits, every level built by one kernel.
+  void bvh() {
+    constexpr uint64_t kMaxLeafCells = 8;
+    int depth = 0; // the least that leaves no leaf more than kMaxLeafCells cells
+    while (((cells_ + (uint64_t(1) << depth) - 1) >> depth) > kMaxLeafCells)
+      ++depth;
+    DeviceBuffer<uint32_t> codes, sortedCodes, ids;
+    codes.resize(cells_);
+    sortedCodes.resize(cells_);
+    ids.resize(cells_);
+    out_.bvhCellIds.resize(cells_);
+    const Vec3f extent = meshBounds_.size();
+    auto scaleOf = [](float e) { return e > 0.f ? 1024.f / e : 0.f; };
+    mortonKernel<<<cellBlocks(), kBlock>>>(centroids_.data(), cells_, meshBounds_.lower,
+                                           {scaleOf(extent.x), scaleOf(extent.y), scaleOf(extent.z)},
+                                           codes.data(), ids.data());
+    UVR_CUDA_CHECK(cudaGetLastError());
+    scratch_.run([&](void *storage, size_t &bytes) {
+      return cub::DeviceRadixSort::SortPairs(storage, bytes, codes.data(), sortedCodes.data(), ids.data(),
+                                             out_.bvhCellIds.data(), int64_t(cells_), 0, 30);
+    });
+    out_.bvhNodes.resize((uint64_t(2) << depth) - 1);
+    bvhLeavesKernel<<<blocksFor(uint64_t(1) << depth, kBlock), kBlock>>>(mesh_, out_.bvhCellIds.data(),
+                                                                         cells_, depth, out_.bvhNodes.data());
+    UVR_CUDA_CHECK(cudaGetLastError());
+    for (int level = depth - 1; level >= 0; --level) {
+      bvhLevelKernel<<<blocksFor(uint64_t(1) << level, kBlock), kBlock>>>(out_.bvhNodes.data(), level);
+      UVR_CUDA_CHECK(cudaGetLastError());
+    }
+  }
+
+  void partitions() {
+    const float pad = partitionPadding(meshBounds_);
+    Box3f root = meshBounds_;
+    root.lower = root.lower - Vec3f{pad, pad, pad};
+    root.upper = root.upper + Vec3f{pad, pad, pad};
+    out_.rootBounds = root;
+
+    // The three sorted lists, and their partitioned copies.
+    DeviceBuffer<uint32_t> lists[3], spare[3];
+    {
+      DeviceBuffer<uint32_t> keys, sortedKeys, ids;
+      keys.resize(cells_);
+      sortedKeys.resize(cells_);
+      ids.resize(cells_);
+      for (int axis = 0; axis < 3; ++axis) {
+        axisKeysKernel<<<cellBlocks(), kBlock>>>(centroids_.data(), cells_, axis, keys.data(), ids.data());
+        UVR_CUDA_CHECK(cudaGetLastError());
+        lists[axis].resize(cells_);
+        scratch_.run([&](void *storage, size_t &bytes) {
+          return cub::DeviceRadixSort::SortPairs(storage, bytes, keys.data(), sortedKeys.data(), ids.data(),
+                                                 lists[axis].data(), int64_t(cells_));
+        });
+      }
+    }
+    for (auto &list : spare)
+      list.resize(cells_);
+    DeviceBuffer<uint32_t> positionNode, flags, aboveBefore;
+    DeviceBuffer<uint8_t> above;
+    positionNode.resize(cells_);
+    flags.resize(cells_);
+    aboveBefore.resize(cells_);
+    above.resize(cells_);
+    UVR_CUDA_CHECK(cudaMemset(positionNode.data(), 0, positionNode.bytes()));
+
+    DeviceBuffer<LevelNode> level, next;
+    const LevelNode rootNode{0, uint32_t(cells_), root};
+    level.upload(&rootNode, 1);
+    DeviceBuffer<KdNode> nodes, decisions;
+    DeviceBuffer<Box3f> leafSpace;
+    DeviceBuffer<uint32_t> splits, splitRank;
+    std::vector<std::pair<uint32_t, uint32_t>> levels; // first node and count per level
+    uint32_t levelBase = 0, leaves = 0, count = 1;
+    for (int depth = 0; count > 0; ++depth) {
+      const SortedLists sorted{{lists[0].data(), lists[1].data(), lists[2].data()}};
+      decisions.grow(count, 0);
+      splits.grow(count, 0);
+      splitRank.grow(count, 0);
+      classifyKernel<<<blocksFor(count, kBlock), kBlock>>>(level.data(), count, sorted, centroids_.data(),
+                                                           leafSize_, depth, decisions.data(), splits.data());
+      UVR_CUDA_CHECK(cudaGetLastError());
+      scratch_.run([&](void *storage, size_t &bytes) {
+        return cub::DeviceScan::ExclusiveSum(storage, bytes, splits.data(), splitRank.data(), int64_t(count));
+      });
+      const uint32_t splitting =
+          downloadOne(splitRank.data() + count - 1) + downloadOne(splits.data() + count - 1);
+      const uint32_t newLeaves = count - splitting;
+      nodes.grow(levelBase + count, levelBase);
+      leafSpace.grow(leaves + newLeaves, leaves);
+      next.grow(2 * uint64_t(splitting), 0);
+      emitKernel<<<blocksFor(count, kBlock), kBlock>>>(level.data(), count, decisions.data(), splits.data(),
+                                                       splitRank.data(), levelBase, leaves, nodes.data(),
+                                                       next.data(), leafSpace.data());
+      UVR_CUDA_CHECK(cudaGetLastError());
+      levels.emplace_back(levelBase, count);
+      levelBase += count;
+      leaves += newLeaves;
+      if (splitting > 0) {
+        sideKernel<<<cellBlocks(), kBlock>>>(cells_, positionNode.data(), level.data(), decisions.data(),
+                                             splits.data(), sorted, above.data());
+        UVR_CUDA_CHECK(cudaGetLastError());
+        for (int axis = 0; axis < 3; ++axis) {
+          aboveFlagsKernel<<<cellBlocks(), kBlock>>>(cells_, positionNode.data(), splits.data(),
+                                                     lists[axis].data(), above.data(), flags.data());
+          UVR_CUDA_CHECK(cudaGetLastError());
+          scratch_.run([&](void *storage, size_t &bytes) {
+            return cub::DeviceScan::ExclusiveSum(storage, bytes, flags.data(), aboveBefore.data(),
+                                                 int64_t(cells_));
+          });
+          partitionListKernel<<<cellBlocks(), kBlock>>>(cells_, positionNode.data(), level.data(),
+                                                        splits.data(), lists[axis].data(), above.data(),
+                                                        aboveBefore.data(), spare[axis].data());
+          UVR_CUDA_CHECK(cudaGetLastError());
+          lists[axis].swap(spare[axis]);
+        }
+        advancePositionsKernel<<<cellBlocks(), kBlock>>>(cells_, positionNode.data(), level.data(),
+                                                         splits.data(), splitRank.data());
+        UVR_CUDA_CHECK(cudaGetLastError());
+      }
+      level.swap(next);
+      count = 2 * splitting;
+    }
+    centroids_.release();
+
+    const uint32_t nodeCount = levelBase;
+    out_.partitionCount = leaves;
+    out_.kdNodes.resize(nodeCount);
+    UVR_CUDA_CHECK(
+        cudaMemcpy(out_.kdNodes.data(), nodes.data(), nodeCount * sizeof(KdNode), cudaMemcpyDeviceToDevice));
+    DeviceBuffer<LeafAccumulator> accumulators;
+    accumulators.resize(leaves);
+    LeafAccumulator empty{AtomicBox::empty(), orderedBits(INFINITY), orderedBits(-INFINITY), 0};
+    clearLeavesKernel<<<blocksFor(leaves, kBlock), kBlock>>>(leaves, empty, accumulators.data());
+    UVR_CUDA_CHECK(cudaGetLastError());
+    gatherLeavesKernel<<<cellBlocks(), kBlock>>>(mesh_, cells_, out_.kdNodes.data(), accumulators.data());
+    UVR_CUDA_CHECK(cudaGetLastError());
+    DeviceBuffer<Box3f> shrunk;
+    shrunk.resize(leaves);
+    out_.valueMin.resize(leaves);
+    out_.valueMax.resize(leaves);
+    out_.cellCounts.resize(leaves);
+    finishLeavesKernel<<<blocksFor(leaves, kBlock), kBlock>>>(leaves, accumulators.data(), leafSpace.data(),
+                                                              pad, shrunk.data(), out_.valueMin.data(),
+                                                              out_.valueMax.data(), out_.cellCounts.data());
+    UVR_CUDA_CHECK(cudaGetLastError());
+    out_.nodeBounds.resize(nodeCount);
+    for (auto it = levels.rbegin(); it != levels.rend(); ++it) {
+      nodeBoundsKernel<<<blocksFor(it->second, kBlock), kBlock>>>(it->first, it->second, out_.kdNodes.data(),
+                                                                  shrunk.data(), out_.nodeBounds.data());
+      UVR_CUDA_CHECK(cudaGetLastError());
+    }
+  }
+
+  MeshView mesh_;
+  uint64_t cells_, pointCount_;
+  uint32_t leafSize_;
+  DeviceAcceleration &out_;
+  DeviceBuffer<Vec3f> centroids_;
+  Box3f meshBounds_;
+  CubScratch scratch_;
+};
+
+} // namespace
+
+void buildOnDevice(const MeshView &mesh, uint64_t pointCount, uint32_t leafSize, DeviceAcceleration &out) {
+  DeviceBuilder(mesh, pointCount, leafSize, out).build();
+}
+
+} // namespace uvr

@@ -1,0 +1,88 @@
+// Checked CUDA calls and owned device allocations, for the CUDA backend's sources.
+#pragma once
+
+#include "core/error.h"
+
+#include <cuda_runtime.h>
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <utility>
+
+namespace uvr {
+
+/// Throws uvr::Error naming the call and the place unless `status` is cudaSuccess.
+void checkCuda(cudaError_t status, const char *call, const char *file, int line);
+#define UVR_CUDA_CHECK(call) ::uvr::checkCuda((call), #call, __FILE__, __LINE__)
+
+/// Throws uvr::Error saying how much memory was asked for and how much is free.
+[[noreturn]] void throwOutOfMemory(size_t bytes);
+
+/// One device allocation, freed with its owner.
+template <typename T> class DeviceBuffer {
+public:
+  DeviceBuffer() = default;
+  ~DeviceBuffer() { cudaFree(data_); }
+  DeviceBuffer(const DeviceBuffer &) = delete;
+  DeviceBuffer &operator=(const DeviceBuffer &) = delete;
+
+  /// Holds exactly `count` elements afterwards; the contents are lost when the size changes.
+  void resize(size_t count) {
+    if (count == count_)
+      return;
+    release();
+    if (count == 0)
+      return;
+    if (cudaMalloc(&data_, count * sizeof(T)) != cudaSuccess) {
+      cudaGetLastError(); // clear the sticky state before reporting
+      data_ = nullptr;
+      throwOutOfMemory(count * sizeof(T));
+    }
+    count_ = count;
+  }
+  /// Holds at least `count` elements afterwards, keeping the first `keep`; grows by half again at least, so
+  /// that a buffer filled piece by piece is copied a few times only.
+  void grow(size_t count, size_t keep) {
+    if (count <= count_)
+      return;
+    DeviceBuffer larger;
+    larger.resize(count + count / 2);
+    if (keep > 0)
+      UVR_CUDA_CHECK(cudaMemcpy(larger.data_, data_, keep * sizeof(T), cudaMemcpyDeviceToDevice));
+    swap(larger);
+  }
+  void release() {
+    cudaFree(data_);
+    data_ = nullptr;
+    count_ = 0;
+  }
+  void swap(DeviceBuffer &other) {
+    std::swap(data_, other.data_);
+    std::swap(count_, other.count_);
+  }
+  /// Copies `count` elements from host memory (allocating as needed); returns the device pointer.
+  T *upload(const T *host, size_t count) {
+    resize(count);
+    if (count > 0)
+      UVR_CUDA_CHECK(cudaMemcpy(data_, host, count * sizeof(T), cudaMemcpyHostToDevice));
+    return data_;
+  }
+  void download(T *host, size_t count) const {
+    if (count > 0)
+      UVR_CUDA_CHECK(cudaMemcpy(host, data_, count * sizeof(T), cudaMemcpyDeviceToHost));
+  }
+  T *data() const { return data_; }
+  size_t size() const { return count_; }
+  size_t bytes() const { return count_ * sizeof(T); }
+
+private:
+  T *data_ = nullptr;
+  size_t count_ = 0;
+};
+
+inline unsigned blocksFor(uint64_t threads, int block) {
+  return unsigned((threads + uint64_t(block) - 1) / uint64_t(block));
+}
+
+} // namespace uvr
