@@ -1,8 +1,8 @@
 // The acceleration data built on the GPU from the mesh already there: tet adjacency, the point-location
 // BVH, the occupancy grid and the partitions. The per-cell steps are the host build's own functions; what
-// differs is how the work is spread (sorts and scans instead of recursion). The partitions and the tet
-// adjacency come out as the host builds them, the occupancy grid bit for bit; the BVH is a hierarchy of its
-// own (see buildBvhOnDevice).
+// differs is how the work is spread (sorts and scans instead of recursion). The tet adjacency, the occupancy
+// grid and the partitions come out as the host builds them (the KD-tree's nodes laid out level by level
+// rather than depth first); the BVH is a radix tree over the cells in Morton order, the host's is Embree's.
 #pragma once
 
 #include "accel/bvh.h"
