@@ -1,11 +1,15 @@
 #include "mesh/mesh.h"
 
+#include "core/buffer.h"
 #include "core/morton.h"
 
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
-#include <numeric>
+#include <array>
+#include <span>
+#include <utility>
 
 namespace uvr {
 namespace {
@@ -31,55 +35,87 @@ struct MortonQuantizer {
   }
 };
 
+/// Runs f(begin, end) over [0, n) in parallel, in chunks of `grain` or more.
+template <typename F> void parallelChunks(size_t n, size_t grain, F &&f) {
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, grain),
+                    [&](const tbb::blocked_range<size_t> &r) { f(r.begin(), r.end()); });
+}
+
 /// Sorts keys (code << 32 | index) by their code, ties in index order: a stable LSD radix sort on the code's
-/// 30 bits, three passes of 10.
-void radixSortByCode(std::vector<uint64_t> &keys) {
+/// 30 bits, three passes of 10. Each pass is parallel over fixed chunks of keys: each chunk counts its
+/// digits, and then writes its keys after those of the earlier chunks with the same digit.
+void radixSortByCode(Buffer<uint64_t> &keys) {
   constexpr int kDigitBits = 10;
   constexpr size_t kBuckets = size_t(1) << kDigitBits;
-  std::vector<uint64_t> scratch(keys.size());
+  constexpr size_t kChunkKeys = size_t(1) << 16;
+  const size_t chunkCount = (keys.size() + kChunkKeys - 1) / kChunkKeys;
+  Buffer<uint64_t> scratch(keys.size());
+  std::vector<std::array<size_t, kBuckets>> next(
+      chunkCount); // per chunk: where its next key of each digit goes
   for (int shift = 32; shift < 32 + 3 * kMortonBits; shift += kDigitBits) {
-    std::vector<size_t> start(kBuckets + 1, 0);
-    for (uint64_t key : keys)
-      ++start[((key >> shift) & (kBuckets - 1)) + 1];
-    for (size_t b = 1; b <= kBuckets; ++b)
-      start[b] += start[b - 1];
-    for (uint64_t key : keys)
-      scratch[start[(key >> shift) & (kBuckets - 1)]++] = key;
-    keys.swap(scratch);
+    auto digit = [shift](uint64_t key) { return size_t(key >> shift) & (kBuckets - 1); };
+    auto forEachChunk = [&](auto &&body) {
+      tbb::parallel_for(size_t(0), chunkCount, [&](size_t k) {
+        body(next[k], keys.data() + k * kChunkKeys,
+             keys.data() + std::min(keys.size(), (k + 1) * kChunkKeys));
+      });
+    };
+    forEachChunk([&](std::array<size_t, kBuckets> &count, const uint64_t *begin, const uint64_t *end) {
+      count.fill(0);
+      for (const uint64_t *key = begin; key != end; ++key)
+        ++count[digit(*key)];
+    });
+    size_t position = 0;
+    for (size_t b = 0; b < kBuckets; ++b)
+      for (std::array<size_t, kBuckets> &count : next)
+        position += std::exchange(count[b], position);
+    forEachChunk([&](std::array<size_t, kBuckets> &position, const uint64_t *begin, const uint64_t *end) {
+      for (const uint64_t *key = begin; key != end; ++key)
+        scratch[position[digit(*key)]++] = *key;
+    });
+    std::swap(keys, scratch);
   }
 }
 
 /// Sorts the cells of one type array by the Morton code of their centroids; returns the new order
-/// (order[newIndex] = oldIndex), or an empty vector when the cells are already in that order.
-std::vector<uint32_t> mortonOrder(const std::vector<uint32_t> &cells, int corners,
-                                  const std::vector<Vec3f> &points, const MortonQuantizer &quantizer) {
+/// (order[newIndex] = oldIndex), or an empty buffer when the cells are already in that order.
+Buffer<uint32_t> mortonOrder(const std::vector<uint32_t> &cells, int corners,
+                             const std::vector<Vec3f> &points, const MortonQuantizer &quantizer) {
   const size_t count = cells.size() / size_t(corners);
-  std::vector<uint64_t> keys(count);
-  tbb::parallel_for(size_t(0), count, [&](size_t c) {
-    Vec3f sum{0.f, 0.f, 0.f};
-    for (int i = 0; i < corners; ++i)
-      sum = sum + points[cells[c * size_t(corners) + size_t(i)]];
-    keys[c] = uint64_t(quantizer.code(sum * (1.f / float(corners)))) << 32 | uint64_t(c);
+  Buffer<uint64_t> keys(count);
+  parallelChunks(count, 1 << 12, [&](size_t begin, size_t end) {
+    for (size_t c = begin; c < end; ++c) {
+      Vec3f sum{0.f, 0.f, 0.f};
+      for (int i = 0; i < corners; ++i)
+        sum = sum + points[cells[c * size_t(corners) + size_t(i)]];
+      keys[c] = uint64_t(quantizer.code(sum * (1.f / float(corners)))) << 32 | uint64_t(c);
+    }
   });
   if (std::is_sorted(keys.begin(), keys.end()))
     return {};
   radixSortByCode(keys);
-  std::vector<uint32_t> order(count);
-  tbb::parallel_for(size_t(0), count, [&](size_t i) { order[i] = uint32_t(keys[i]); });
+  Buffer<uint32_t> order(count);
+  parallelChunks(count, 1 << 12, [&](size_t begin, size_t end) {
+    for (size_t i = begin; i < end; ++i)
+      order[i] = uint32_t(keys[i]);
+  });
   return order;
 }
 
 /// Item offset + i becomes the old item offset + order[i], for items of `Stride` elements (a constant, so
 /// that an item's copy is a few moves and no memmove call).
 template <size_t Stride, typename T>
-void permute(std::vector<T> &values, const std::vector<uint32_t> &order, size_t offset = 0) {
-  const T *source = values.data() + offset * Stride;
-  std::vector<T> permuted(order.size() * Stride);
-  tbb::parallel_for(size_t(0), order.size(), [&](size_t i) {
-    for (size_t k = 0; k < Stride; ++k)
-      permuted[i * Stride + k] = source[size_t(order[i]) * Stride + k];
+void permute(std::vector<T> &values, std::span<const uint32_t> order, size_t offset = 0) {
+  T *items = values.data() + offset * Stride;
+  Buffer<T> old(order.size() * Stride);
+  parallelChunks(old.size(), 1 << 16, [&](size_t begin, size_t end) {
+    std::copy(items + begin, items + end, old.data() + begin);
   });
-  std::copy(permuted.begin(), permuted.end(), values.begin() + std::ptrdiff_t(offset * Stride));
+  parallelChunks(order.size(), 1 << 12, [&](size_t begin, size_t end) {
+    for (size_t i = begin; i < end; ++i)
+      for (size_t k = 0; k < Stride; ++k)
+        items[i * Stride + k] = old[size_t(order[i]) * Stride + k];
+  });
 }
 
 } // namespace
@@ -92,7 +128,7 @@ void orderSpatially(Mesh &mesh) {
   // Cells: each type array on its own, so that the type order (and thus cell indices' meaning) is kept.
   size_t firstCell = 0;
   auto orderCells = [&]<size_t Corners>(std::vector<uint32_t> &cells) {
-    const std::vector<uint32_t> order = mortonOrder(cells, int(Corners), mesh.points, quantizer);
+    const Buffer<uint32_t> order = mortonOrder(cells, int(Corners), mesh.points, quantizer);
     if (!order.empty()) {
       permute<Corners>(cells, order);
       for (ScalarField &field : mesh.fields)
