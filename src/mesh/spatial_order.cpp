@@ -1,39 +1,14 @@
-#include "mesh/mesh.h"
-
-#include "core/buffer.h"
-#include "core/morton.h"
+#include "mesh/spatial_order.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <array>
-#include <span>
 #include <utility>
 
 namespace uvr {
 namespace {
-
-// A 30-bit Morton code (a 1024³ grid over the mesh bounds): fine enough to order a billion cells for
-// locality, and small enough to sit beside a 32-bit cell index in one 64-bit key.
-constexpr int kMortonBits = 10;
-constexpr float kMortonLast = float((1 << kMortonBits) - 1); // the last grid cell along an axis
-
-struct MortonQuantizer {
-  Vec3f lower, scale;
-
-  explicit MortonQuantizer(const Box3f &box) : lower(box.lower) {
-    const Vec3f extent = box.upper - box.lower;
-    scale = {extent.x > 0.f ? kMortonLast / extent.x : 0.f, extent.y > 0.f ? kMortonLast / extent.y : 0.f,
-             extent.z > 0.f ? kMortonLast / extent.z : 0.f};
-  }
-  uint32_t code(Vec3f p) const {
-    const Vec3f d = p - lower;
-    return uint32_t(mortonCode(uint32_t(clampf(d.x * scale.x, 0.f, kMortonLast)),
-                               uint32_t(clampf(d.y * scale.y, 0.f, kMortonLast)),
-                               uint32_t(clampf(d.z * scale.z, 0.f, kMortonLast))));
-  }
-};
 
 /// Runs f(begin, end) over [0, n) in parallel, in chunks of `grain` or more.
 template <typename F> void parallelChunks(size_t n, size_t grain, F &&f) {
@@ -52,7 +27,7 @@ void radixSortByCode(Buffer<uint64_t> &keys) {
   Buffer<uint64_t> scratch(keys.size());
   std::vector<std::array<size_t, kBuckets>> next(
       chunkCount); // per chunk: where its next key of each digit goes
-  for (int shift = 32; shift < 32 + 3 * kMortonBits; shift += kDigitBits) {
+  for (int shift = 32; shift < 32 + 3 * CellKeys::kBits; shift += kDigitBits) {
     auto digit = [shift](uint64_t key) { return size_t(key >> shift) & (kBuckets - 1); };
     auto forEachChunk = [&](auto &&body) {
       tbb::parallel_for(size_t(0), chunkCount, [&](size_t k) {
@@ -77,33 +52,7 @@ void radixSortByCode(Buffer<uint64_t> &keys) {
   }
 }
 
-/// Sorts the cells of one type array by the Morton code of their centroids; returns the new order
-/// (order[newIndex] = oldIndex), or an empty buffer when the cells are already in that order.
-Buffer<uint32_t> mortonOrder(const std::vector<uint32_t> &cells, int corners,
-                             const std::vector<Vec3f> &points, const MortonQuantizer &quantizer) {
-  const size_t count = cells.size() / size_t(corners);
-  Buffer<uint64_t> keys(count);
-  parallelChunks(count, 1 << 12, [&](size_t begin, size_t end) {
-    for (size_t c = begin; c < end; ++c) {
-      Vec3f sum{0.f, 0.f, 0.f};
-      for (int i = 0; i < corners; ++i)
-        sum = sum + points[cells[c * size_t(corners) + size_t(i)]];
-      keys[c] = uint64_t(quantizer.code(sum * (1.f / float(corners)))) << 32 | uint64_t(c);
-    }
-  });
-  if (std::is_sorted(keys.begin(), keys.end()))
-    return {};
-  radixSortByCode(keys);
-  Buffer<uint32_t> order(count);
-  parallelChunks(count, 1 << 12, [&](size_t begin, size_t end) {
-    for (size_t i = begin; i < end; ++i)
-      order[i] = uint32_t(keys[i]);
-  });
-  return order;
-}
-
-/// Item offset + i becomes the old item offset + order[i], for items of `Stride` elements (a constant, so
-/// that an item's copy is a few moves and no memmove call).
+/// Item offset + i becomes the old item offset + order[i].
 template <size_t Stride, typename T>
 void permute(std::vector<T> &values, std::span<const uint32_t> order, size_t offset = 0) {
   T *items = values.data() + offset * Stride;
@@ -111,38 +60,24 @@ void permute(std::vector<T> &values, std::span<const uint32_t> order, size_t off
   parallelChunks(old.size(), 1 << 16, [&](size_t begin, size_t end) {
     std::copy(items + begin, items + end, old.data() + begin);
   });
-  parallelChunks(order.size(), 1 << 12, [&](size_t begin, size_t end) {
-    for (size_t i = begin; i < end; ++i)
-      for (size_t k = 0; k < Stride; ++k)
-        items[i * Stride + k] = old[size_t(order[i]) * Stride + k];
-  });
+  gather<Stride>(items, old.data(), order.size(), order);
 }
 
 } // namespace
 
-void orderSpatially(Mesh &mesh) {
-  if (mesh.points.empty())
-    return;
-  const MortonQuantizer quantizer(mesh.bounds());
+Buffer<uint32_t> sortedOrder(Buffer<uint64_t> &keys) {
+  if (std::is_sorted(keys.begin(), keys.end()))
+    return {};
+  radixSortByCode(keys);
+  Buffer<uint32_t> order(keys.size());
+  parallelChunks(keys.size(), 1 << 12, [&](size_t begin, size_t end) {
+    for (size_t i = begin; i < end; ++i)
+      order[i] = uint32_t(keys[i]);
+  });
+  return order;
+}
 
-  // Cells: each type array on its own, so that the type order (and thus cell indices' meaning) is kept.
-  size_t firstCell = 0;
-  auto orderCells = [&]<size_t Corners>(std::vector<uint32_t> &cells) {
-    const Buffer<uint32_t> order = mortonOrder(cells, int(Corners), mesh.points, quantizer);
-    if (!order.empty()) {
-      permute<Corners>(cells, order);
-      for (ScalarField &field : mesh.fields)
-        if (field.centering == Centering::Cell)
-          permute<1>(field.values, order, firstCell);
-    }
-    firstCell += cells.size() / Corners;
-  };
-  orderCells.operator()<4>(mesh.tets);
-  orderCells.operator()<5>(mesh.pyramids);
-  orderCells.operator()<6>(mesh.wedges);
-  orderCells.operator()<8>(mesh.hexes);
-
-  // Points: numbered by first use in the new cell order, so that a cell's corners lie close in memory.
+void numberPointsByFirstUse(Mesh &mesh) {
   constexpr uint32_t kUnused = 0xffffffffu;
   std::vector<uint32_t> newIndex(mesh.points.size(), kUnused);
   uint32_t next = 0;
@@ -152,7 +87,7 @@ void orderSpatially(Mesh &mesh) {
         newIndex[v] = next++;
       v = newIndex[v];
     }
-  for (uint32_t &index : newIndex) // points no cell uses keep their relative order at the end
+  for (uint32_t &index : newIndex)
     if (index == kUnused)
       index = next++;
   std::vector<uint32_t> order(mesh.points.size());
@@ -162,6 +97,36 @@ void orderSpatially(Mesh &mesh) {
   for (ScalarField &field : mesh.fields)
     if (field.centering == Centering::Point)
       permute<1>(field.values, order);
+}
+
+void orderSpatially(Mesh &mesh) {
+  if (mesh.points.empty())
+    return;
+  const CellKeys cellKeys(mesh.bounds());
+
+  // Cells: each type array on its own, so that the type order (and thus cell indices' meaning) is kept.
+  size_t firstCell = 0;
+  auto orderCells = [&]<size_t Corners>(std::vector<uint32_t> &cells) {
+    const size_t count = cells.size() / Corners;
+    Buffer<uint64_t> keys(count);
+    parallelChunks(count, 1 << 12, [&](size_t begin, size_t end) {
+      for (size_t c = begin; c < end; ++c)
+        keys[c] = cellKeys.key(&cells[c * Corners], int(Corners), mesh.points, c);
+    });
+    const Buffer<uint32_t> order = sortedOrder(keys);
+    if (!order.empty()) {
+      permute<Corners>(cells, order);
+      for (ScalarField &field : mesh.fields)
+        if (field.centering == Centering::Cell)
+          permute<1>(field.values, order, firstCell);
+    }
+    firstCell += count;
+  };
+  orderCells.operator()<4>(mesh.tets);
+  orderCells.operator()<5>(mesh.pyramids);
+  orderCells.operator()<6>(mesh.wedges);
+  orderCells.operator()<8>(mesh.hexes);
+  numberPointsByFirstUse(mesh);
 }
 
 } // namespace uvr
