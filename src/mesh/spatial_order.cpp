@@ -16,40 +16,62 @@ template <typename F> void parallelChunks(size_t n, size_t grain, F &&f) {
                     [&](const tbb::blocked_range<size_t> &r) { f(r.begin(), r.end()); });
 }
 
-/// Sorts keys (code << 32 | index) by their code, ties in index order: a stable LSD radix sort on the code's
-/// 30 bits, three passes of 10. Each pass is parallel over fixed chunks of keys: each chunk counts its
-/// digits, and then writes its keys after those of the earlier chunks with the same digit.
+constexpr int kDigitBits = 10; // a radix sort digit: one Morton coordinate's bits
+constexpr size_t kBuckets = size_t(1) << kDigitBits;
+
+size_t digit(uint64_t key, int shift) { return size_t(key >> shift) & (kBuckets - 1); }
+
+/// Writes [begin, end) to out ordered by one digit, ties in their order.
+void countingSort(const uint64_t *begin, const uint64_t *end, uint64_t *out, int shift) {
+  std::array<size_t, kBuckets> next{};
+  for (const uint64_t *key = begin; key != end; ++key)
+    ++next[digit(*key, shift)];
+  size_t position = 0;
+  for (size_t &n : next)
+    position += std::exchange(n, position);
+  for (const uint64_t *key = begin; key != end; ++key)
+    out[next[digit(*key, shift)]++] = *key;
+}
+
+/// Sorts keys (code << 32 | index) by their code, ties in index order. A stable radix sort on the code's 30
+/// bits, three digits of 10: first by the top digit, in parallel over chunks of keys (each chunk counts its
+/// digits, then writes its keys after those of earlier chunks with the same digit); then each of the 1024
+/// runs of equal top digits by the lower two, in parallel over runs, each small enough to stay in cache.
 void radixSortByCode(Buffer<uint64_t> &keys) {
-  constexpr int kDigitBits = 10;
-  constexpr size_t kBuckets = size_t(1) << kDigitBits;
+  constexpr int kLowShift = 32, kTopShift = 32 + 2 * kDigitBits;
   constexpr size_t kChunkKeys = size_t(1) << 16;
   const size_t chunkCount = (keys.size() + kChunkKeys - 1) / kChunkKeys;
   Buffer<uint64_t> scratch(keys.size());
   std::vector<std::array<size_t, kBuckets>> next(
       chunkCount); // per chunk: where its next key of each digit goes
-  for (int shift = 32; shift < 32 + 3 * CellKeys::kBits; shift += kDigitBits) {
-    auto digit = [shift](uint64_t key) { return size_t(key >> shift) & (kBuckets - 1); };
-    auto forEachChunk = [&](auto &&body) {
-      tbb::parallel_for(size_t(0), chunkCount, [&](size_t k) {
-        body(next[k], keys.data() + k * kChunkKeys,
-             keys.data() + std::min(keys.size(), (k + 1) * kChunkKeys));
-      });
-    };
-    forEachChunk([&](std::array<size_t, kBuckets> &count, const uint64_t *begin, const uint64_t *end) {
-      count.fill(0);
-      for (const uint64_t *key = begin; key != end; ++key)
-        ++count[digit(*key)];
+  auto forEachChunk = [&](auto &&body) {
+    tbb::parallel_for(size_t(0), chunkCount, [&](size_t k) {
+      body(next[k], keys.data() + k * kChunkKeys, keys.data() + std::min(keys.size(), (k + 1) * kChunkKeys));
     });
-    size_t position = 0;
-    for (size_t b = 0; b < kBuckets; ++b)
-      for (std::array<size_t, kBuckets> &count : next)
-        position += std::exchange(count[b], position);
-    forEachChunk([&](std::array<size_t, kBuckets> &position, const uint64_t *begin, const uint64_t *end) {
-      for (const uint64_t *key = begin; key != end; ++key)
-        scratch[position[digit(*key)]++] = *key;
-    });
-    std::swap(keys, scratch);
+  };
+  forEachChunk([&](std::array<size_t, kBuckets> &count, const uint64_t *begin, const uint64_t *end) {
+    count.fill(0);
+    for (const uint64_t *key = begin; key != end; ++key)
+      ++count[digit(*key, kTopShift)];
+  });
+  std::array<size_t, kBuckets + 1> runStart{};
+  size_t position = 0;
+  for (size_t b = 0; b < kBuckets; ++b) {
+    runStart[b] = position;
+    for (std::array<size_t, kBuckets> &count : next)
+      position += std::exchange(count[b], position);
   }
+  runStart[kBuckets] = position;
+  forEachChunk([&](std::array<size_t, kBuckets> &position, const uint64_t *begin, const uint64_t *end) {
+    for (const uint64_t *key = begin; key != end; ++key)
+      scratch[position[digit(*key, kTopShift)]++] = *key;
+  });
+  tbb::parallel_for(size_t(0), kBuckets, [&](size_t b) {
+    const size_t first = runStart[b], last = runStart[b + 1];
+    countingSort(scratch.data() + first, scratch.data() + last, keys.data() + first, kLowShift);
+    countingSort(keys.data() + first, keys.data() + last, scratch.data() + first, kLowShift + kDigitBits);
+  });
+  std::swap(keys, scratch);
 }
 
 /// Item offset + i becomes the old item offset + order[i].
