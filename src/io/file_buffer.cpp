@@ -2,6 +2,9 @@
 
 #include "core/error.h"
 
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
 #include <fcntl.h>
@@ -43,8 +46,14 @@ FileBuffer readFile(const std::string &path) {
   InputFile input(path);
   FileBuffer file;
   file.size = input.size();
-  file.data = std::make_unique_for_overwrite<uint8_t[]>(file.size + 1);
-  input.read(0, file.data.get(), file.size);
+  file.data = Buffer<uint8_t>(file.size + 1);
+  // In parallel chunks: the copy from the page cache and the buffer's page faults are a good part of a
+  // binary file's load.
+  constexpr uint64_t kChunkBytes = uint64_t(4) << 20;
+  tbb::parallel_for(uint64_t(0), (file.size + kChunkBytes - 1) / kChunkBytes, [&](uint64_t chunk) {
+    const uint64_t begin = chunk * kChunkBytes;
+    input.read(begin, file.data.data() + begin, std::min(kChunkBytes, file.size - begin));
+  });
   file.data[file.size] = 0;
   return file;
 }

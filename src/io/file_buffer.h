@@ -2,17 +2,19 @@
 // the binary readers do, to copy each byte once).
 #pragma once
 
+#include "core/buffer.h"
+
 #include <cstdint>
-#include <memory>
 #include <string>
 
 namespace uvr {
 
 struct FileBuffer {
-  std::unique_ptr<uint8_t[]> data; ///< the whole file plus a terminating zero
+  Buffer<uint8_t> data; ///< the whole file plus a terminating zero
   uint64_t size = 0;
 
-  char *chars() const { return reinterpret_cast<char *>(data.get()); }
+  char *chars() { return reinterpret_cast<char *>(data.data()); }
+  const char *chars() const { return reinterpret_cast<const char *>(data.data()); }
 };
 
 /// A regular file open for reading; throws uvr::Error naming it when it cannot be opened or read.

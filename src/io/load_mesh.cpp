@@ -214,6 +214,8 @@ Mesh loadMesh(const std::string &path, const LoadOptions &options) {
   const std::string extension = lowerCaseExtension(path);
   if (options.timeStep != 0 && extension != ".msh" && !isExodus(extension))
     throw Error(path, "", "time step " + std::to_string(options.timeStep) + " asked, the file has 1");
+  if (extension == ".vtu")
+    return loadVtu(path);
   return buildMesh(readGrid(path, options), path);
 }
 

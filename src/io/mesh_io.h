@@ -16,6 +16,9 @@ struct LoadOptions {
 /// VTK XML unstructured grid: ascii, inline base64, appended raw or base64; zlib; UInt32/UInt64 headers;
 /// several Pieces (merged).
 UnstructuredGrid readVtu(const std::string &path);
+/// A .vtu file as buildMesh makes it, from the decoded cell arrays in place: loadMesh's way, which copies
+/// them into no UnstructuredGrid.
+Mesh loadVtu(const std::string &path);
 
 /// Legacy VTK unstructured grid: ascii or big-endian binary; `CELLS n size` and the 5.1 OFFSETS/CONNECTIVITY
 /// layout; POINT_DATA and CELL_DATA with SCALARS and FIELD arrays.

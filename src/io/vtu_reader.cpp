@@ -2,6 +2,7 @@
 //
 // Only the XML head is given to pugixml: appended raw data can hold any byte, so the text up to the '_'
 // marker of <AppendedData> is parsed alone and each appended array is read at its `offset` after the marker.
+#include "core/buffer.h"
 #include "core/error.h"
 #include "io/file_buffer.h"
 #include "io/mesh_io.h"
@@ -31,10 +32,6 @@
 namespace uvr {
 
 namespace {
-
-using Bytes = std::unique_ptr<uint8_t[]>;
-
-Bytes allocateBytes(uint64_t size) { return std::make_unique_for_overwrite<uint8_t[]>(size); }
 
 bool multiplyOverflows(uint64_t a, uint64_t b, uint64_t &product) {
   return __builtin_mul_overflow(a, b, &product);
@@ -292,7 +289,7 @@ struct Payload {
     uint64_t source, sourceSize, target, targetSize;
   };
   const uint8_t *data = nullptr; ///< the uncompressed bytes, or the concatenated zlib blocks
-  Bytes storage;                 ///< base64-decoded bytes behind `data`
+  Buffer<uint8_t> storage;       ///< base64-decoded bytes behind `data`
   uint64_t size = 0;             ///< uncompressed bytes
   std::vector<Block> blocks;     ///< empty when uncompressed
   uint64_t position = 0;         ///< byte in the file, for errors
@@ -325,11 +322,23 @@ const char *inflateBlock(const uint8_t *source, uint64_t sourceSize, uint8_t *ta
   return inflated == targetSize ? nullptr : "it inflates to fewer bytes than its header says";
 }
 
+/// An UnstructuredGrid whose cell arrays, the largest, are Buffers: decoded straight into them, and viewed in
+/// place by buildMesh.
+struct VtuGrid {
+  std::vector<Vec3f> points;
+  Buffer<int64_t> offsets; ///< cell count + 1 entries, offsets[0] == 0
+  Buffer<int64_t> connectivity;
+  Buffer<uint8_t> types;
+  std::vector<ScalarField> fields;
+
+  CellArraysView cells() const { return {offsets, connectivity, types}; }
+};
+
 class VtuReader {
 public:
   explicit VtuReader(const std::string &path) : path_(path), file_(readFile(path)) {}
 
-  UnstructuredGrid read() {
+  VtuGrid read() {
     parseXml();
     pugi::xml_node root = doc_.document_element();
     if (std::string_view(root.name()) != "VTKFile")
@@ -341,7 +350,7 @@ public:
       fail(position(root),
            "unsupported dataset type '" + std::string(type) + "' (expected UnstructuredGrid)");
 
-    std::vector<UnstructuredGrid> pieces;
+    std::vector<VtuGrid> pieces;
     std::vector<uint64_t> piecePositions;
     for (pugi::xml_node piece : grid.children("Piece")) {
       pieces.push_back(readPiece(piece));
@@ -360,7 +369,7 @@ private:
     fail(byte, "DataArray '" + array.name + "': " + what);
   }
 
-  const char *fileChars() const { return reinterpret_cast<const char *>(file_.data.get()); }
+  const char *fileChars() const { return reinterpret_cast<const char *>(file_.data.data()); }
 
   uint64_t position(pugi::xml_node node) const {
     return uint64_t(std::max<ptrdiff_t>(node.offset_debug(), 0));
@@ -374,7 +383,7 @@ private:
     pugi::xml_parse_result result;
     if (tag == std::string_view::npos) {
       xmlBase_ = fileChars();
-      result = doc_.load_buffer_inplace(file_.data.get(), file_.size, options, pugi::encoding_utf8);
+      result = doc_.load_buffer_inplace(file_.data.data(), file_.size, options, pugi::encoding_utf8);
     } else {
       size_t tagEnd = all.find('>', tag);
       if (tagEnd == std::string_view::npos)
@@ -384,7 +393,7 @@ private:
         ++marker;
       if (marker == all.size() || all[marker] != '_')
         fail(marker, "expected '_' at the start of the appended data");
-      appended_ = file_.data.get() + marker + 1;
+      appended_ = file_.data.data() + marker + 1;
       head_ = std::string(all.substr(0, tagEnd + 1)) + "</AppendedData></VTKFile>";
       xmlBase_ = head_.data();
       result = doc_.load_buffer_inplace(head_.data(), head_.size(), options, pugi::encoding_utf8);
@@ -479,7 +488,7 @@ private:
       begin = reinterpret_cast<const uint8_t *>(array.text.data());
       end = begin + array.text.size();
     } else {
-      end = file_.data.get() + file_.size;
+      end = file_.data.data() + file_.size;
       if (array.offset > uint64_t(end - appended_))
         fail(array, array.position,
              "offset " + std::to_string(array.offset) + " is past the end of the file");
@@ -487,7 +496,7 @@ private:
       base64 = appendedBase64_;
     }
     const uint8_t *fileStart =
-        array.format == Format::Binary ? reinterpret_cast<const uint8_t *>(xmlBase_) : file_.data.get();
+        array.format == Format::Binary ? reinterpret_cast<const uint8_t *>(xmlBase_) : file_.data.data();
     ByteStream stream(begin, end, base64);
     const std::string endsFirst =
         array.format == Format::Binary ? " but its text ends first" : " but the file ends first";
@@ -521,9 +530,9 @@ private:
       if (payload.size > stream.available())
         fail(array, here(), std::to_string(payload.size) + " bytes declared" + endsFirst);
       if (base64) {
-        payload.storage = allocateBytes(payload.size);
-        readOrFail(payload.storage.get(), payload.size);
-        payload.data = payload.storage.get();
+        payload.storage = Buffer<uint8_t>(payload.size);
+        readOrFail(payload.storage.data(), payload.size);
+        payload.data = payload.storage.data();
       } else {
         payload.data = stream.position();
       }
@@ -559,9 +568,9 @@ private:
       fail(array, here(), std::to_string(compressedTotal) + " compressed bytes declared" + endsFirst);
     payload.position = here();
     if (base64) {
-      payload.storage = allocateBytes(compressedTotal);
-      readOrFail(payload.storage.get(), compressedTotal);
-      payload.data = payload.storage.get();
+      payload.storage = Buffer<uint8_t>(compressedTotal);
+      readOrFail(payload.storage.data(), compressedTotal);
+      payload.data = payload.storage.data();
     } else {
       payload.data = stream.position();
     }
@@ -652,15 +661,16 @@ private:
     } else if (payload.blocks.empty()) {
       convert(array.type, swap_, payload.data, count, out);
     } else {
-      Bytes bytes = allocateBytes(payload.size);
-      decode(array, payload, bytes.get());
-      convert(array.type, swap_, bytes.get(), count, out);
+      Buffer<uint8_t> bytes(payload.size);
+      decode(array, payload, bytes.data());
+      convert(array.type, swap_, bytes.data(), count, out);
     }
   }
 
-  template <typename T> std::vector<T> readValues(const ArrayInfo &array, uint64_t count) const {
+  /// The array's `count` values in an Array of them: a std::vector or a Buffer.
+  template <typename Array> Array readValues(const ArrayInfo &array, uint64_t count) const {
     Payload payload = prepare(array, count);
-    std::vector<T> values(count);
+    Array values(count);
     fill(array, payload, count, values.data());
     return values;
   }
@@ -678,10 +688,10 @@ private:
          "expected <Cells> with a DataArray named '" + std::string(name) + "'");
   }
 
-  UnstructuredGrid readPiece(pugi::xml_node piece) const {
+  VtuGrid readPiece(pugi::xml_node piece) const {
     uint64_t pointCount = countAttribute(piece, "NumberOfPoints");
     uint64_t cellCount = countAttribute(piece, "NumberOfCells");
-    UnstructuredGrid grid;
+    VtuGrid grid;
 
     if (pointCount > 0) {
       pugi::xml_node node = piece.child("Points").child("DataArray");
@@ -705,7 +715,8 @@ private:
         fail(array, array.position, "point " + std::to_string(bad) + " is not finite");
     }
 
-    grid.offsets.assign(1, 0);
+    grid.offsets = Buffer<int64_t>(1);
+    grid.offsets[0] = 0;
     if (cellCount > 0) {
       pugi::xml_node cells = piece.child("Cells");
       ArrayInfo offsets = cellArray(cells, "offsets", piece);
@@ -714,14 +725,15 @@ private:
 
       // The file stores each cell's end; the grid also keeps the leading zero.
       Payload payload = prepare(offsets, cellCount);
-      grid.offsets.resize(cellCount + 1);
+      grid.offsets = Buffer<int64_t>(cellCount + 1);
+      grid.offsets[0] = 0;
       fill(offsets, payload, cellCount, grid.offsets.data() + 1);
       uint64_t bad = findFirst(cellCount, [&](uint64_t i) { return grid.offsets[i + 1] < grid.offsets[i]; });
       if (bad < cellCount)
         fail(offsets, offsets.position, "offsets decrease (or start below 0) at cell " + std::to_string(bad));
 
-      uint64_t connectivityCount = uint64_t(grid.offsets.back());
-      grid.connectivity = readValues<int64_t>(connectivity, connectivityCount);
+      uint64_t connectivityCount = uint64_t(grid.offsets[cellCount]);
+      grid.connectivity = readValues<Buffer<int64_t>>(connectivity, connectivityCount);
       bad = findFirst(connectivityCount, [&](uint64_t i) {
         return grid.connectivity[i] < 0 || uint64_t(grid.connectivity[i]) >= pointCount;
       });
@@ -731,13 +743,14 @@ private:
                  " is outside [0, " + std::to_string(pointCount) + ")");
 
       if (types.type == ScalarType::UInt8) {
-        grid.types = readValues<uint8_t>(types, cellCount);
+        grid.types = readValues<Buffer<uint8_t>>(types, cellCount);
       } else {
-        std::vector<int64_t> codes = readValues<int64_t>(types, cellCount);
+        Buffer<int64_t> codes = readValues<Buffer<int64_t>>(types, cellCount);
         bad = findFirst(cellCount, [&](uint64_t i) { return codes[i] < 0 || codes[i] > 255; });
         if (bad < cellCount)
           fail(types, types.position, "cell type " + std::to_string(codes[bad]) + " is not a VTK type code");
-        grid.types.assign(codes.begin(), codes.end());
+        grid.types = Buffer<uint8_t>(cellCount);
+        std::copy(codes.begin(), codes.end(), grid.types.begin());
       }
     }
 
@@ -757,7 +770,7 @@ private:
       uint64_t count = 0;
       if (multiplyOverflows(tuples, array.components, count))
         fail(array, array.position, "value count overflows");
-      ScalarField field{array.name, centering, readValues<float>(array, count)};
+      ScalarField field{array.name, centering, readValues<std::vector<float>>(array, count)};
       if (array.components > 1) {
         std::vector<float> magnitude(tuples);
         uint64_t components = array.components;
@@ -776,32 +789,43 @@ private:
   }
 
   /// Concatenates pieces: point indices and offsets of later pieces are shifted past the earlier ones.
-  UnstructuredGrid merge(std::vector<UnstructuredGrid> pieces, const std::vector<uint64_t> &positions) const {
+  VtuGrid merge(std::vector<VtuGrid> pieces, const std::vector<uint64_t> &positions) const {
     if (pieces.size() == 1)
       return std::move(pieces[0]);
-    UnstructuredGrid grid;
-    grid.offsets.assign(1, 0);
-    for (const ScalarField &f : pieces[0].fields)
-      grid.fields.push_back({f.name, f.centering, {}});
+    uint64_t cellCount = 0, connectivityCount = 0;
     for (size_t p = 0; p < pieces.size(); ++p) {
-      UnstructuredGrid &piece = pieces[p];
-      bool sameFields = piece.fields.size() == grid.fields.size();
-      for (size_t f = 0; sameFields && f < grid.fields.size(); ++f)
-        sameFields = piece.fields[f].name == grid.fields[f].name &&
-                     piece.fields[f].centering == grid.fields[f].centering;
+      const VtuGrid &piece = pieces[p];
+      bool sameFields = piece.fields.size() == pieces[0].fields.size();
+      for (size_t f = 0; sameFields && f < piece.fields.size(); ++f)
+        sameFields = piece.fields[f].name == pieces[0].fields[f].name &&
+                     piece.fields[f].centering == pieces[0].fields[f].centering;
       if (!sameFields)
         fail(positions[p], "this <Piece> has other data arrays than the first one");
-      auto pointBase = int64_t(grid.points.size());
-      auto connectivityBase = int64_t(grid.connectivity.size());
+      cellCount += piece.types.size();
+      connectivityCount += piece.connectivity.size();
+    }
+    VtuGrid grid;
+    grid.offsets = Buffer<int64_t>(cellCount + 1);
+    grid.offsets[0] = 0;
+    grid.connectivity = Buffer<int64_t>(connectivityCount);
+    grid.types = Buffer<uint8_t>(cellCount);
+    for (const ScalarField &f : pieces[0].fields)
+      grid.fields.push_back({f.name, f.centering, {}});
+    uint64_t cellBase = 0, connectivityBase = 0;
+    for (VtuGrid &piece : pieces) {
+      const auto pointBase = int64_t(grid.points.size());
       grid.points.insert(grid.points.end(), piece.points.begin(), piece.points.end());
-      for (size_t i = 1; i < piece.offsets.size(); ++i)
-        grid.offsets.push_back(piece.offsets[i] + connectivityBase);
-      for (int64_t index : piece.connectivity)
-        grid.connectivity.push_back(index + pointBase);
-      grid.types.insert(grid.types.end(), piece.types.begin(), piece.types.end());
+      for (size_t i = 0; i < piece.types.size(); ++i) {
+        grid.offsets[cellBase + i + 1] = piece.offsets[i + 1] + int64_t(connectivityBase);
+        grid.types[cellBase + i] = piece.types[i];
+      }
+      for (size_t i = 0; i < piece.connectivity.size(); ++i)
+        grid.connectivity[connectivityBase + i] = piece.connectivity[i] + pointBase;
       for (size_t f = 0; f < grid.fields.size(); ++f)
         grid.fields[f].values.insert(grid.fields[f].values.end(), piece.fields[f].values.begin(),
                                      piece.fields[f].values.end());
+      cellBase += piece.types.size();
+      connectivityBase += piece.connectivity.size();
       piece = {};
     }
     return grid;
@@ -821,6 +845,18 @@ private:
 
 } // namespace
 
-UnstructuredGrid readVtu(const std::string &path) { return VtuReader(path).read(); }
+UnstructuredGrid readVtu(const std::string &path) {
+  VtuGrid grid = VtuReader(path).read();
+  return {std::move(grid.points),
+          {grid.offsets.begin(), grid.offsets.end()},
+          {grid.connectivity.begin(), grid.connectivity.end()},
+          {grid.types.begin(), grid.types.end()},
+          std::move(grid.fields)};
+}
+
+Mesh loadVtu(const std::string &path) {
+  VtuGrid grid = VtuReader(path).read();
+  return buildMesh(std::move(grid.points), grid.cells(), std::move(grid.fields), path);
+}
 
 } // namespace uvr

@@ -2,15 +2,18 @@
 
 #include "core/error.h"
 #include "core/parallel_bounds.h"
+#include "mesh/spatial_order.h"
 
-#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
+#include <tbb/task_group.h>
 
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <functional>
 #include <string>
+#include <utility>
 
 namespace uvr {
 
@@ -112,6 +115,58 @@ void reverseWinding(CellType type, uint32_t *v) {
   }
 }
 
+/// Which of Mesh's type arrays (tets, pyramids, wedges, hexahedra) a volume cell type goes to.
+int slotOf(CellType type) {
+  switch (type) {
+  case CellType::Tetra:
+    return 0;
+  case CellType::Pyramid:
+    return 1;
+  case CellType::Wedge:
+    return 2;
+  case CellType::Hexahedron:
+    return 3;
+  }
+  return 0;
+}
+
+/// The cell's point count, when its offsets do not decrease. Unsigned, as a chunk checked in parallel may
+/// start past an earlier chunk's bad offsets.
+bool pointCount(const CellArraysView &grid, size_t c, uint64_t &count) {
+  count = uint64_t(grid.offsets[c + 1]) - uint64_t(grid.offsets[c]);
+  return grid.offsets[c + 1] >= grid.offsets[c];
+}
+
+/// Whether buildMesh can take cell c: offsets that do not decrease, and a volume cell with points for all of
+/// its corners or a lower-dimensional one (skipped).
+bool wellFormed(const CellArraysView &grid, size_t c) {
+  uint64_t count;
+  if (!pointCount(grid, c, count))
+    return false;
+  CellKind kind;
+  if (volumeKind(grid.types[c], kind))
+    return count >= uint64_t(kind.corners);
+  return lowerDimensional(grid.types[c]);
+}
+
+/// Says why cell c is not wellFormed.
+[[noreturn]] void throwMalformed(const CellArraysView &grid, size_t c, const std::string &source) {
+  const std::string cell = "cell " + std::to_string(c);
+  const uint8_t vtkType = grid.types[c];
+  uint64_t count;
+  if (!pointCount(grid, c, count))
+    throw Error(source, cell, "cell offsets decrease");
+  CellKind kind;
+  if (volumeKind(vtkType, kind))
+    throw Error(source, cell,
+                "cell of VTK type " + std::to_string(vtkType) + " needs " + std::to_string(kind.corners) +
+                    " points, has " + std::to_string(count));
+  throw Error(source, cell, "unsupported VTK cell type " + std::to_string(vtkType));
+}
+
+constexpr CellKind kSlotKinds[4] = {
+    {CellType::Tetra, 4}, {CellType::Pyramid, 5}, {CellType::Wedge, 6}, {CellType::Hexahedron, 8}};
+
 } // namespace
 
 bool orientCell(CellType type, uint32_t *v, const std::vector<Vec3f> &points) {
@@ -150,112 +205,169 @@ Mesh buildMesh(std::vector<Vec3f> &&points, CellArraysView grid, std::vector<Sca
   if (grid.offsets[0] != 0 || uint64_t(grid.offsets[cellCount]) > grid.connectivity.size())
     throw Error(source, "", "cell offsets do not span the connectivity array");
 
-  Mesh mesh;
-  std::array<uint64_t, 4> perType{}; // tets, pyramids, wedges, hexes
-  auto slot = [](CellType type) {
-    switch (type) {
-    case CellType::Tetra:
-      return 0;
-    case CellType::Pyramid:
-      return 1;
-    case CellType::Wedge:
-      return 2;
-    case CellType::Hexahedron:
-      return 3;
-    }
-    return 0;
+  // Parallel passes over chunks of cells: the first checks the cells and counts each chunk's cells of each
+  // type, which says where the second writes them. Errors name the first bad cell in file order, as a serial
+  // pass would.
+  constexpr size_t kChunkCells = size_t(1) << 14;
+  struct Chunk {
+    std::array<uint64_t, 4> perType{}; ///< in pass 2: the chunk's first cell of each type, within its type
+    uint64_t skipped = 0;
+    size_t firstMalformed = SIZE_MAX;
+    size_t firstBadIndex = SIZE_MAX;
+  };
+  std::vector<Chunk> chunks((cellCount + kChunkCells - 1) / kChunkCells);
+  auto forEachChunk = [&](auto &&body) {
+    tbb::parallel_for(size_t(0), chunks.size(), [&](size_t k) {
+      body(chunks[k], k * kChunkCells, std::min(cellCount, (k + 1) * kChunkCells));
+    });
   };
 
-  for (size_t c = 0; c < cellCount; ++c) {
-    CellKind kind;
-    const uint8_t vtkType = grid.types[c];
-    if (grid.offsets[c + 1] < grid.offsets[c])
-      throw Error(source, "cell " + std::to_string(c), "cell offsets decrease");
-    if (volumeKind(vtkType, kind)) {
-      if (grid.offsets[c + 1] - grid.offsets[c] < kind.corners)
-        throw Error(source, "cell " + std::to_string(c),
-                    "cell of VTK type " + std::to_string(vtkType) + " needs " + std::to_string(kind.corners) +
-                        " points, has " + std::to_string(grid.offsets[c + 1] - grid.offsets[c]));
-      ++perType[slot(kind.type)];
-    } else if (lowerDimensional(vtkType)) {
-      ++mesh.skippedCells;
-    } else {
-      throw Error(source, "cell " + std::to_string(c),
-                  "unsupported VTK cell type " + std::to_string(vtkType));
+  forEachChunk([&](Chunk &chunk, size_t begin, size_t end) {
+    for (size_t c = begin; c < end; ++c) {
+      CellKind kind;
+      if (!wellFormed(grid, c)) {
+        chunk.firstMalformed = c;
+        return;
+      }
+      if (volumeKind(grid.types[c], kind))
+        ++chunk.perType[slotOf(kind.type)];
+      else
+        ++chunk.skipped;
     }
+  });
+  Mesh mesh;
+  std::array<uint64_t, 4> perType{};
+  for (Chunk &chunk : chunks) {
+    if (chunk.firstMalformed != SIZE_MAX)
+      throwMalformed(grid, chunk.firstMalformed, source);
+    for (size_t s = 0; s < 4; ++s)
+      perType[s] += std::exchange(chunk.perType[s], perType[s]);
+    mesh.skippedCells += chunk.skipped;
   }
   if (points.size() > UINT32_MAX)
     throw Error(source, "", "more than 2^32 points are not supported");
 
-  mesh.tets.resize(perType[0] * 4);
-  mesh.pyramids.resize(perType[1] * 5);
-  mesh.wedges.resize(perType[2] * 6);
-  mesh.hexes.resize(perType[3] * 8);
-  const std::array<uint32_t *, 4> typeCells = {mesh.tets.data(), mesh.pyramids.data(), mesh.wedges.data(),
-                                               mesh.hexes.data()};
-  std::array<uint32_t *, 4> cursor = typeCells;
+  // std::vector zeroes the mesh's cell arrays on one thread: a task of its own, while the others go on.
+  tbb::task_group zeroing;
+  zeroing.run([&] {
+    mesh.tets.resize(perType[0] * 4);
+    mesh.pyramids.resize(perType[1] * 5);
+    mesh.wedges.resize(perType[2] * 6);
+    mesh.hexes.resize(perType[3] * 8);
+  });
+
+  // Pass 2 writes each type's cells (32-bit indices) and the cell field values in type order to Buffers. The
+  // mesh's arrays take them once the cells are wound and sorted along orderSpatially's Morton curve.
+  mesh.points = std::move(points);
+  const CellKeys cellKeys(mesh.bounds());
   const std::array<uint64_t, 4> firstCell = {0, perType[0], perType[0] + perType[1],
                                              perType[0] + perType[1] + perType[2]};
-  std::array<uint64_t, 4> next = firstCell;
-  std::vector<uint64_t> fileToMesh(cellCount, UINT64_MAX);
-
-  for (size_t c = 0; c < cellCount; ++c) {
-    CellKind kind;
-    if (!volumeKind(grid.types[c], kind))
-      continue;
-    const int s = slot(kind.type);
-    uint32_t *v = cursor[s];
-    const int64_t *ids = &grid.connectivity[size_t(grid.offsets[c])];
-    for (int i = 0; i < kind.corners; ++i) {
-      if (ids[i] < 0 || uint64_t(ids[i]) >= points.size())
-        throw Error(source, "cell " + std::to_string(c),
-                    "point index " + std::to_string(ids[i]) + " outside [0, " +
-                        std::to_string(points.size()) + ")");
-      v[i] = uint32_t(ids[i]);
-    }
-    if (grid.types[c] == 11) { // voxel corners run in x-fastest lattice order
-      std::swap(v[2], v[3]);
-      std::swap(v[6], v[7]);
-    }
-    cursor[s] += kind.corners;
-    fileToMesh[c] = next[s]++;
+  const uint64_t keptCells = firstCell[3] + perType[3];
+  std::array<Buffer<uint32_t>, 4> typeCells;
+  std::array<Buffer<uint64_t>, 4> typeKeys;
+  for (size_t s = 0; s < 4; ++s) {
+    typeCells[s] = Buffer<uint32_t>(perType[s] * uint64_t(kSlotKinds[s].corners));
+    typeKeys[s] = Buffer<uint64_t>(perType[s]);
   }
+  // A cell field of the wrong size is reported below, after the cells.
+  std::vector<Buffer<float>> typeOrderValues(fields.size());
+  for (size_t f = 0; f < fields.size(); ++f)
+    if (fields[f].centering == Centering::Cell && fields[f].values.size() == cellCount)
+      typeOrderValues[f] = Buffer<float>(keptCells);
 
-  // Winding, in parallel: each cell on its own.
-  const CellKind kinds[] = {
-      {CellType::Tetra, 4}, {CellType::Pyramid, 5}, {CellType::Wedge, 6}, {CellType::Hexahedron, 8}};
-  for (int s = 0; s < 4; ++s) {
-    const CellKind kind = kinds[s];
-    mesh.invertedCells += tbb::parallel_reduce(
-        tbb::blocked_range<size_t>(0, perType[size_t(s)]), uint64_t(0),
-        [&](const tbb::blocked_range<size_t> &range, uint64_t inverted) {
-          for (size_t c = range.begin(); c < range.end(); ++c)
-            inverted += orientCell(kind.type, typeCells[size_t(s)] + c * size_t(kind.corners), points);
+  forEachChunk([&](Chunk &chunk, size_t begin, size_t end) {
+    std::array<uint64_t, 4> next = chunk.perType;
+    for (size_t c = begin; c < end; ++c) {
+      CellKind kind;
+      if (!volumeKind(grid.types[c], kind))
+        continue;
+      const int s = slotOf(kind.type);
+      uint32_t *v = typeCells[s].data() + next[s] * uint64_t(kind.corners);
+      const int64_t *ids = &grid.connectivity[size_t(grid.offsets[c])];
+      for (int i = 0; i < kind.corners; ++i) {
+        if (ids[i] < 0 || uint64_t(ids[i]) >= mesh.points.size()) {
+          chunk.firstBadIndex = c;
+          return;
+        }
+        v[i] = uint32_t(ids[i]);
+      }
+      if (grid.types[c] == 11) { // voxel corners run in x-fastest lattice order
+        std::swap(v[2], v[3]);
+        std::swap(v[6], v[7]);
+      }
+      for (size_t f = 0; f < fields.size(); ++f)
+        if (!typeOrderValues[f].empty())
+          typeOrderValues[f][firstCell[s] + next[s]] = fields[f].values[c];
+      ++next[s];
+    }
+  });
+  // Winding and keys in a pass of their own over each type array. Files seldom list cells in spatial order,
+  // so the corners' points are loaded from all over memory: the loop asks for those of a later cell early.
+  auto windAndKey = [&]<CellType Type, int Corners>(size_t s) {
+    constexpr size_t kPrefetchCells = 16;
+    return tbb::parallel_reduce(
+        tbb::blocked_range<size_t>(0, perType[s], 1 << 12), uint64_t(0),
+        [&](const tbb::blocked_range<size_t> &r, uint64_t inverted) {
+          for (size_t c = r.begin(); c < r.end(); ++c) {
+            uint32_t *v = typeCells[s].data() + c * Corners;
+            if (c + kPrefetchCells < r.end())
+              for (int i = 0; i < Corners; ++i)
+                __builtin_prefetch(&mesh.points[v[kPrefetchCells * Corners + i]]);
+            inverted += orientCell(Type, v, mesh.points);
+            typeKeys[s][c] = cellKeys.key(v, Corners, mesh.points, c);
+          }
           return inverted;
         },
         std::plus<>());
+  };
+  for (const Chunk &chunk : chunks) {
+    if (chunk.firstBadIndex != SIZE_MAX) {
+      const size_t c = chunk.firstBadIndex;
+      const int64_t *ids = &grid.connectivity[size_t(grid.offsets[c])];
+      const int64_t bad = *std::find_if(ids, ids + vertexCount(grid.types[c]), [&](int64_t id) {
+        return id < 0 || uint64_t(id) >= mesh.points.size();
+      });
+      throw Error(source, "cell " + std::to_string(c),
+                  "point index " + std::to_string(bad) + " outside [0, " +
+                      std::to_string(mesh.points.size()) + ")");
+    }
   }
-
-  mesh.points = std::move(points);
-  for (ScalarField &field : fields) {
-    if (field.centering == Centering::Cell) {
-      if (field.values.size() != cellCount)
-        throw Error(source, "",
-                    "cell field '" + field.name + "' has " + std::to_string(field.values.size()) +
-                        " values for " + std::to_string(cellCount) + " cells");
-      std::vector<float> reordered(mesh.cellCount());
-      for (size_t c = 0; c < cellCount; ++c)
-        if (fileToMesh[c] != UINT64_MAX)
-          reordered[fileToMesh[c]] = field.values[c];
-      field.values = std::move(reordered);
-    } else if (field.values.size() != mesh.points.size()) {
+  mesh.invertedCells =
+      windAndKey.operator()<CellType::Tetra, 4>(0) + windAndKey.operator()<CellType::Pyramid, 5>(1) +
+      windAndKey.operator()<CellType::Wedge, 6>(2) + windAndKey.operator()<CellType::Hexahedron, 8>(3);
+  for (size_t f = 0; f < fields.size(); ++f) {
+    const ScalarField &field = fields[f];
+    if (field.centering == Centering::Cell && field.values.size() != cellCount)
+      throw Error(source, "",
+                  "cell field '" + field.name + "' has " + std::to_string(field.values.size()) +
+                      " values for " + std::to_string(cellCount) + " cells");
+    if (field.centering == Centering::Point && field.values.size() != mesh.points.size())
       throw Error(source, "",
                   "point field '" + field.name + "' has " + std::to_string(field.values.size()) +
                       " values for " + std::to_string(mesh.points.size()) + " points");
-    }
-    mesh.fields.push_back(std::move(field));
   }
-  orderSpatially(mesh);
+
+  std::array<Buffer<uint32_t>, 4> orders;
+  for (size_t s = 0; s < 4; ++s)
+    orders[s] = sortedOrder(typeKeys[s]);
+  zeroing.wait();
+  auto placeCells = [&]<size_t Corners>(size_t s, std::vector<uint32_t> &cells) {
+    gather<Corners>(cells.data(), typeCells[s].data(), perType[s], orders[s]);
+  };
+  placeCells.operator()<4>(0, mesh.tets);
+  placeCells.operator()<5>(1, mesh.pyramids);
+  placeCells.operator()<6>(2, mesh.wedges);
+  placeCells.operator()<8>(3, mesh.hexes);
+  for (size_t f = 0; f < fields.size(); ++f) {
+    if (fields[f].centering == Centering::Cell) {
+      fields[f].values.resize(keptCells);
+      for (size_t s = 0; s < 4; ++s)
+        gather<1>(fields[f].values.data() + firstCell[s], typeOrderValues[f].data() + firstCell[s],
+                  perType[s], orders[s]);
+    }
+    mesh.fields.push_back(std::move(fields[f]));
+  }
+  numberPointsByFirstUse(mesh);
   return mesh;
 }
 

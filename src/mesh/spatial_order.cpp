@@ -1,112 +1,105 @@
-#include "mesh/mesh.h"
+#include "mesh/spatial_order.h"
 
-#include "core/morton.h"
-
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
-#include <numeric>
+#include <array>
+#include <utility>
 
 namespace uvr {
 namespace {
 
-// A 30-bit Morton code (a 1024³ grid over the mesh bounds): fine enough to order a billion cells for
-// locality, and small enough to sit beside a 32-bit cell index in one 64-bit key.
-constexpr int kMortonBits = 10;
-constexpr float kMortonLast = float((1 << kMortonBits) - 1); // the last grid cell along an axis
-
-struct MortonQuantizer {
-  Vec3f lower, scale;
-
-  explicit MortonQuantizer(const Box3f &box) : lower(box.lower) {
-    const Vec3f extent = box.upper - box.lower;
-    scale = {extent.x > 0.f ? kMortonLast / extent.x : 0.f, extent.y > 0.f ? kMortonLast / extent.y : 0.f,
-             extent.z > 0.f ? kMortonLast / extent.z : 0.f};
-  }
-  uint32_t code(Vec3f p) const {
-    const Vec3f d = p - lower;
-    return uint32_t(mortonCode(uint32_t(clampf(d.x * scale.x, 0.f, kMortonLast)),
-                               uint32_t(clampf(d.y * scale.y, 0.f, kMortonLast)),
-                               uint32_t(clampf(d.z * scale.z, 0.f, kMortonLast))));
-  }
-};
-
-/// Sorts keys (code << 32 | index) by their code, ties in index order: a stable LSD radix sort on the code's
-/// 30 bits, three passes of 10.
-void radixSortByCode(std::vector<uint64_t> &keys) {
-  constexpr int kDigitBits = 10;
-  constexpr size_t kBuckets = size_t(1) << kDigitBits;
-  std::vector<uint64_t> scratch(keys.size());
-  for (int shift = 32; shift < 32 + 3 * kMortonBits; shift += kDigitBits) {
-    std::vector<size_t> start(kBuckets + 1, 0);
-    for (uint64_t key : keys)
-      ++start[((key >> shift) & (kBuckets - 1)) + 1];
-    for (size_t b = 1; b <= kBuckets; ++b)
-      start[b] += start[b - 1];
-    for (uint64_t key : keys)
-      scratch[start[(key >> shift) & (kBuckets - 1)]++] = key;
-    keys.swap(scratch);
-  }
+/// Runs f(begin, end) over [0, n) in parallel, in chunks of `grain` or more.
+template <typename F> void parallelChunks(size_t n, size_t grain, F &&f) {
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, grain),
+                    [&](const tbb::blocked_range<size_t> &r) { f(r.begin(), r.end()); });
 }
 
-/// Sorts the cells of one type array by the Morton code of their centroids; returns the new order
-/// (order[newIndex] = oldIndex), or an empty vector when the cells are already in that order.
-std::vector<uint32_t> mortonOrder(const std::vector<uint32_t> &cells, int corners,
-                                  const std::vector<Vec3f> &points, const MortonQuantizer &quantizer) {
-  const size_t count = cells.size() / size_t(corners);
-  std::vector<uint64_t> keys(count);
-  tbb::parallel_for(size_t(0), count, [&](size_t c) {
-    Vec3f sum{0.f, 0.f, 0.f};
-    for (int i = 0; i < corners; ++i)
-      sum = sum + points[cells[c * size_t(corners) + size_t(i)]];
-    keys[c] = uint64_t(quantizer.code(sum * (1.f / float(corners)))) << 32 | uint64_t(c);
+constexpr int kDigitBits = 10; // a radix sort digit: one Morton coordinate's bits
+constexpr size_t kBuckets = size_t(1) << kDigitBits;
+
+size_t digit(uint64_t key, int shift) { return size_t(key >> shift) & (kBuckets - 1); }
+
+/// Writes [begin, end) to out ordered by one digit, ties in their order.
+void countingSort(const uint64_t *begin, const uint64_t *end, uint64_t *out, int shift) {
+  std::array<size_t, kBuckets> next{};
+  for (const uint64_t *key = begin; key != end; ++key)
+    ++next[digit(*key, shift)];
+  size_t position = 0;
+  for (size_t &n : next)
+    position += std::exchange(n, position);
+  for (const uint64_t *key = begin; key != end; ++key)
+    out[next[digit(*key, shift)]++] = *key;
+}
+
+/// Sorts keys (code << 32 | index) by their code, ties in index order. A stable radix sort on the code's 30
+/// bits, three digits of 10: first by the top digit, in parallel over chunks of keys (each chunk counts its
+/// digits, then writes its keys after those of earlier chunks with the same digit); then each of the 1024
+/// runs of equal top digits by the lower two, in parallel over runs, each small enough to stay in cache.
+void radixSortByCode(Buffer<uint64_t> &keys) {
+  constexpr int kLowShift = 32, kTopShift = 32 + 2 * kDigitBits;
+  constexpr size_t kChunkKeys = size_t(1) << 16;
+  const size_t chunkCount = (keys.size() + kChunkKeys - 1) / kChunkKeys;
+  Buffer<uint64_t> scratch(keys.size());
+  std::vector<std::array<size_t, kBuckets>> next(
+      chunkCount); // per chunk: where its next key of each digit goes
+  auto forEachChunk = [&](auto &&body) {
+    tbb::parallel_for(size_t(0), chunkCount, [&](size_t k) {
+      body(next[k], keys.data() + k * kChunkKeys, keys.data() + std::min(keys.size(), (k + 1) * kChunkKeys));
+    });
+  };
+  forEachChunk([&](std::array<size_t, kBuckets> &count, const uint64_t *begin, const uint64_t *end) {
+    count.fill(0);
+    for (const uint64_t *key = begin; key != end; ++key)
+      ++count[digit(*key, kTopShift)];
   });
-  if (std::is_sorted(keys.begin(), keys.end()))
-    return {};
-  radixSortByCode(keys);
-  std::vector<uint32_t> order(count);
-  tbb::parallel_for(size_t(0), count, [&](size_t i) { order[i] = uint32_t(keys[i]); });
-  return order;
+  std::array<size_t, kBuckets + 1> runStart{};
+  size_t position = 0;
+  for (size_t b = 0; b < kBuckets; ++b) {
+    runStart[b] = position;
+    for (std::array<size_t, kBuckets> &count : next)
+      position += std::exchange(count[b], position);
+  }
+  runStart[kBuckets] = position;
+  forEachChunk([&](std::array<size_t, kBuckets> &position, const uint64_t *begin, const uint64_t *end) {
+    for (const uint64_t *key = begin; key != end; ++key)
+      scratch[position[digit(*key, kTopShift)]++] = *key;
+  });
+  tbb::parallel_for(size_t(0), kBuckets, [&](size_t b) {
+    const size_t first = runStart[b], last = runStart[b + 1];
+    countingSort(scratch.data() + first, scratch.data() + last, keys.data() + first, kLowShift);
+    countingSort(keys.data() + first, keys.data() + last, scratch.data() + first, kLowShift + kDigitBits);
+  });
+  std::swap(keys, scratch);
 }
 
-/// Item offset + i becomes the old item offset + order[i], for items of `Stride` elements (a constant, so
-/// that an item's copy is a few moves and no memmove call).
+/// Item offset + i becomes the old item offset + order[i].
 template <size_t Stride, typename T>
-void permute(std::vector<T> &values, const std::vector<uint32_t> &order, size_t offset = 0) {
-  const T *source = values.data() + offset * Stride;
-  std::vector<T> permuted(order.size() * Stride);
-  tbb::parallel_for(size_t(0), order.size(), [&](size_t i) {
-    for (size_t k = 0; k < Stride; ++k)
-      permuted[i * Stride + k] = source[size_t(order[i]) * Stride + k];
+void permute(std::vector<T> &values, std::span<const uint32_t> order, size_t offset = 0) {
+  T *items = values.data() + offset * Stride;
+  Buffer<T> old(order.size() * Stride);
+  parallelChunks(old.size(), 1 << 16, [&](size_t begin, size_t end) {
+    std::copy(items + begin, items + end, old.data() + begin);
   });
-  std::copy(permuted.begin(), permuted.end(), values.begin() + std::ptrdiff_t(offset * Stride));
+  gather<Stride>(items, old.data(), order.size(), order);
 }
 
 } // namespace
 
-void orderSpatially(Mesh &mesh) {
-  if (mesh.points.empty())
-    return;
-  const MortonQuantizer quantizer(mesh.bounds());
+Buffer<uint32_t> sortedOrder(Buffer<uint64_t> &keys) {
+  if (std::is_sorted(keys.begin(), keys.end()))
+    return {};
+  radixSortByCode(keys);
+  Buffer<uint32_t> order(keys.size());
+  parallelChunks(keys.size(), 1 << 12, [&](size_t begin, size_t end) {
+    for (size_t i = begin; i < end; ++i)
+      order[i] = uint32_t(keys[i]);
+  });
+  return order;
+}
 
-  // Cells: each type array on its own, so that the type order (and thus cell indices' meaning) is kept.
-  size_t firstCell = 0;
-  auto orderCells = [&]<size_t Corners>(std::vector<uint32_t> &cells) {
-    const std::vector<uint32_t> order = mortonOrder(cells, int(Corners), mesh.points, quantizer);
-    if (!order.empty()) {
-      permute<Corners>(cells, order);
-      for (ScalarField &field : mesh.fields)
-        if (field.centering == Centering::Cell)
-          permute<1>(field.values, order, firstCell);
-    }
-    firstCell += cells.size() / Corners;
-  };
-  orderCells.operator()<4>(mesh.tets);
-  orderCells.operator()<5>(mesh.pyramids);
-  orderCells.operator()<6>(mesh.wedges);
-  orderCells.operator()<8>(mesh.hexes);
-
-  // Points: numbered by first use in the new cell order, so that a cell's corners lie close in memory.
+void numberPointsByFirstUse(Mesh &mesh) {
   constexpr uint32_t kUnused = 0xffffffffu;
   std::vector<uint32_t> newIndex(mesh.points.size(), kUnused);
   uint32_t next = 0;
@@ -116,7 +109,7 @@ void orderSpatially(Mesh &mesh) {
         newIndex[v] = next++;
       v = newIndex[v];
     }
-  for (uint32_t &index : newIndex) // points no cell uses keep their relative order at the end
+  for (uint32_t &index : newIndex)
     if (index == kUnused)
       index = next++;
   std::vector<uint32_t> order(mesh.points.size());
@@ -126,6 +119,36 @@ void orderSpatially(Mesh &mesh) {
   for (ScalarField &field : mesh.fields)
     if (field.centering == Centering::Point)
       permute<1>(field.values, order);
+}
+
+void orderSpatially(Mesh &mesh) {
+  if (mesh.points.empty())
+    return;
+  const CellKeys cellKeys(mesh.bounds());
+
+  // Cells: each type array on its own, so that the type order (and thus cell indices' meaning) is kept.
+  size_t firstCell = 0;
+  auto orderCells = [&]<size_t Corners>(std::vector<uint32_t> &cells) {
+    const size_t count = cells.size() / Corners;
+    Buffer<uint64_t> keys(count);
+    parallelChunks(count, 1 << 12, [&](size_t begin, size_t end) {
+      for (size_t c = begin; c < end; ++c)
+        keys[c] = cellKeys.key(&cells[c * Corners], int(Corners), mesh.points, c);
+    });
+    const Buffer<uint32_t> order = sortedOrder(keys);
+    if (!order.empty()) {
+      permute<Corners>(cells, order);
+      for (ScalarField &field : mesh.fields)
+        if (field.centering == Centering::Cell)
+          permute<1>(field.values, order, firstCell);
+    }
+    firstCell += count;
+  };
+  orderCells.operator()<4>(mesh.tets);
+  orderCells.operator()<5>(mesh.pyramids);
+  orderCells.operator()<6>(mesh.wedges);
+  orderCells.operator()<8>(mesh.hexes);
+  numberPointsByFirstUse(mesh);
 }
 
 } // namespace uvr

@@ -1,0 +1,81 @@
+// The steps of orderSpatially, for buildMesh to use one by one: it computes each cell's Morton key in the
+// pass that writes and winds the cell, while the cell's points are still in cache.
+#pragma once
+
+#include "core/buffer.h"
+#include "mesh/mesh.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <array>
+#include <span>
+
+namespace uvr {
+
+/// Keys that order cells along a Morton curve through their centroids: a 30-bit code (a 1024³ grid over the
+/// mesh bounds; fine enough to order a billion cells for locality) beside the cell's 32-bit index.
+class CellKeys {
+public:
+  explicit CellKeys(const Box3f &bounds) : lower_(bounds.lower) {
+    const Vec3f extent = bounds.upper - bounds.lower;
+    scale_ = {extent.x > 0.f ? kLast / extent.x : 0.f, extent.y > 0.f ? kLast / extent.y : 0.f,
+              extent.z > 0.f ? kLast / extent.z : 0.f};
+  }
+
+  /// The key of the cell with corners v[0, corners) at index `index` of its type array.
+  uint64_t key(const uint32_t *v, int corners, const std::vector<Vec3f> &points, uint64_t index) const {
+    Vec3f sum{0.f, 0.f, 0.f};
+    for (int i = 0; i < corners; ++i)
+      sum = sum + points[v[i]];
+    return uint64_t(code(sum * (1.f / float(corners)))) << 32 | index;
+  }
+
+  static constexpr int kBits = 10; ///< per axis
+
+private:
+  static constexpr float kLast = float((1 << kBits) - 1); // the last grid cell along an axis
+
+  uint32_t code(Vec3f p) const {
+    const Vec3f d = p - lower_;
+    return kSpread[uint32_t(clampf(d.x * scale_.x, 0.f, kLast))] |
+           kSpread[uint32_t(clampf(d.y * scale_.y, 0.f, kLast))] << 1 |
+           kSpread[uint32_t(clampf(d.z * scale_.z, 0.f, kLast))] << 2;
+  }
+
+  /// spreadBits3 (core/morton.h) of each 10-bit coordinate: three table loads make a code, far fewer
+  /// instructions than spreading the bits, for millions of cells.
+  static constexpr std::array<uint32_t, 1 << kBits> kSpread = [] {
+    std::array<uint32_t, 1 << kBits> table{};
+    for (uint32_t v = 0; v < table.size(); ++v)
+      for (int bit = 0; bit < kBits; ++bit)
+        table[v] |= (v >> bit & 1u) << (3 * bit);
+    return table;
+  }();
+
+  Vec3f lower_, scale_;
+};
+
+/// Sorts the keys of one type array's cells; returns the new order (order[newIndex] = oldIndex), or an empty
+/// buffer when the cells are in that order already.
+Buffer<uint32_t> sortedOrder(Buffer<uint64_t> &keys);
+
+/// Item i of `items` becomes item order[i] of `source` (item i where `order` is empty: in order already), for
+/// `count` items of `Stride` elements (a constant, so that an item's copy is a few moves and no memmove
+/// call); in parallel.
+template <size_t Stride, typename T>
+void gather(T *items, const T *source, size_t count, std::span<const uint32_t> order) {
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, count, 1 << 12), [&](const tbb::blocked_range<size_t> &r) {
+    for (size_t i = r.begin(); i < r.end(); ++i) {
+      const size_t from = order.empty() ? i : size_t(order[i]);
+      for (size_t k = 0; k < Stride; ++k)
+        items[i * Stride + k] = source[from * Stride + k];
+    }
+  });
+}
+
+/// Numbers the points by first use in the cells' order (points no cell uses keep their relative order at the
+/// end), so that a cell's corners lie close in memory; the cells, points and point fields follow.
+void numberPointsByFirstUse(Mesh &mesh);
+
+} // namespace uvr
