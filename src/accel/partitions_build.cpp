@@ -148,7 +148,7 @@ private:
     tree.nodes[index] = node;
     tree.nodes.resize(tree.nodes.size() + 2);
     const std::array<Box3f, 2> childBox = childBoxes(box, node);
-    // Cells with centroid at the split go below or above arbitrarily: their boxes are assigned later.
+    // Cells with centroid at the split go below or above by index; their boxes are assigned later.
     buildSerial(tree, node.child, childBox[0], first, middle, depth + 1);
     buildSerial(tree, node.child + 1, childBox[1], middle, last, depth + 1);
   }
