@@ -88,7 +88,7 @@ TEST(BackendsAgree, CudaBuildsTheHostsAccelerationData) {
       Renderer renderer(mesh, mesh.findField("f"), leafSize);
       if (!haveCudaDevice(renderer))
         GTEST_SKIP() << "no CUDA GPU here; scripts/gpu-check runs this where there is one";
-      const AccelerationCopy device = renderer.deviceAcceleration();
+      const HostAcceleration device = renderer.deviceAcceleration();
       const Partitions &host = renderer.partitions();
       ASSERT_EQ(device.partitions.count(), host.count()) << "leaf size " << leafSize;
       ASSERT_EQ(device.partitions.nodes.size(), host.nodes.size());

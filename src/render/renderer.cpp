@@ -45,14 +45,6 @@ Backend parseBackend(const std::string &name) {
   throw Error("unknown backend '" + name + "': expected cpu or cuda");
 }
 
-struct Renderer::HostAcceleration {
-  Bvh bvh;
-  OccupancyGrid occupancy;
-  std::vector<uint32_t> tetNeighbors;
-  Partitions partitions;
-  double buildMs = 0.0;
-};
-
 Renderer::Renderer(const Mesh &mesh, int fieldIndex, uint32_t leafSize) : mesh_(mesh), leafSize_(leafSize) {
   if (fieldIndex < 0 || size_t(fieldIndex) >= mesh.fields.size())
     throw Error("the mesh has no scalar field to render");
@@ -63,7 +55,7 @@ Renderer::Renderer(const Mesh &mesh, int fieldIndex, uint32_t leafSize) : mesh_(
 
 Renderer::~Renderer() = default;
 
-const Renderer::HostAcceleration &Renderer::host() const {
+const HostAcceleration &Renderer::host() const {
   if (!host_) {
     const Timer timer;
     auto built = std::make_unique<HostAcceleration>();
@@ -71,7 +63,7 @@ const Renderer::HostAcceleration &Renderer::host() const {
     built->occupancy = buildOccupancyGrid(meshView_);
     built->tetNeighbors = buildTetNeighbors(mesh_);
     built->partitions = buildPartitions(meshView_, leafSize_);
-    built->buildMs = timer.milliseconds();
+    hostBuildMs_ = timer.milliseconds();
     host_ = std::move(built);
   }
   return *host_;
@@ -151,7 +143,7 @@ double Renderer::buildMs(Backend backend) const {
   if (backend == Backend::Cuda)
     return cuda_ ? cuda_->buildMs() : 0.0;
 #endif
-  return backend == Backend::Cpu && host_ ? host_->buildMs : 0.0;
+  return backend == Backend::Cpu ? hostBuildMs_ : 0.0;
 }
 
 #ifdef UVR_HAVE_CUDA
@@ -162,7 +154,7 @@ PartitionMetadata Renderer::deviceMetadata() const { return cuda_ ? cuda_->metad
 std::vector<std::pair<std::string, double>> Renderer::deviceBuildSteps() const {
   return cuda_ ? cuda_->buildSteps() : std::vector<std::pair<std::string, double>>{};
 }
-AccelerationCopy Renderer::deviceAcceleration() const {
+HostAcceleration Renderer::deviceAcceleration() const {
   if (!cuda_)
     throw Error("CUDA has not been prepared");
   return cuda_->acceleration();
@@ -173,7 +165,7 @@ size_t Renderer::deviceMemoryBytes() const { return 0; }
 size_t Renderer::deviceSceneBytes() const { return 0; }
 PartitionMetadata Renderer::deviceMetadata() const { return {}; }
 std::vector<std::pair<std::string, double>> Renderer::deviceBuildSteps() const { return {}; }
-AccelerationCopy Renderer::deviceAcceleration() const {
+HostAcceleration Renderer::deviceAcceleration() const {
   throw Error("this uvr was built without CUDA: use --backend cpu");
 }
 #endif

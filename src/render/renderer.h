@@ -40,8 +40,8 @@ struct RenderSettings {
 class CudaRenderer;
 struct PixelTarget;
 
-/// The acceleration data the GPU built, copied back to the host for checks against the host's builds.
-struct AccelerationCopy {
+/// Acceleration data in host memory: what the CPU backend renders with, or what the GPU built, copied back.
+struct HostAcceleration {
   Bvh bvh;
   OccupancyGrid occupancy;
   std::vector<uint32_t> tetNeighbors;
@@ -92,7 +92,7 @@ public:
   /// The GPU build's steps and their milliseconds; empty until CUDA has been prepared.
   std::vector<std::pair<std::string, double>> deviceBuildSteps() const;
   /// What the GPU built, copied back; needs CUDA prepared.
-  AccelerationCopy deviceAcceleration() const;
+  HostAcceleration deviceAcceleration() const;
   /// The metadata on the host: after an update on the GPU, computed there on first use.
   const PartitionMetadata &metadata() const;
   /// The metadata the GPU computed, copied back; empty until CUDA has been prepared.
@@ -104,7 +104,6 @@ public:
   double tfUpdateMs() const { return tfUpdateMs_; }
 
 private:
-  struct HostAcceleration;
   const HostAcceleration &host() const; ///< built on first use
   SceneView sceneView() const;          ///< all a ray reads on the host; needs the transfer function
 
@@ -112,6 +111,7 @@ private:
   MeshView meshView_;
   uint32_t leafSize_;
   mutable std::unique_ptr<HostAcceleration> host_;
+  mutable double hostBuildMs_ = 0.0;
   std::optional<TransferFunction> tf_;
   mutable PartitionMetadata metadata_;
   mutable bool metadataCurrent_ = false; // false after an update that only the GPU made

@@ -293,14 +293,14 @@ const std::vector<std::pair<std::string, double>> &CudaRenderer::buildSteps() co
   return impl_->accel.stepMs;
 }
 
-AccelerationCopy CudaRenderer::acceleration() const {
+HostAcceleration CudaRenderer::acceleration() const {
   const DeviceAcceleration &accel = impl_->accel;
   auto copy = [](const auto &buffer) {
     std::vector<std::remove_cv_t<std::remove_pointer_t<decltype(buffer.data())>>> host(buffer.size());
     buffer.download(host.data(), host.size());
     return host;
   };
-  AccelerationCopy out;
+  HostAcceleration out;
   out.bvh.nodes = copy(accel.bvhNodes);
   out.bvh.cellIds = copy(accel.bvhCellIds);
   out.tetNeighbors = copy(accel.tetNeighbors);

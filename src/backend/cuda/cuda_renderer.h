@@ -32,7 +32,8 @@ public:
   uint32_t setTransferFunction(const TransferFunction &tf);
   /// Copies the metadata of the last setTransferFunction back, for checks against the host's.
   PartitionMetadata metadata() const;
-  AccelerationCopy acceleration() const;
+  /// Copies the acceleration data the GPU built back, for checks against the host's builds.
+  HostAcceleration acceleration() const;
 
   uint32_t partitionCount() const;
   /// Milliseconds the build on the GPU took, in all and per step (upload of the mesh excluded).
