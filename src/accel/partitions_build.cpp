@@ -189,10 +189,9 @@ Partitions buildPartitions(const MeshView &mesh, uint32_t leafSize) {
                       }
                     });
 
-  Box3f root = parallelBounds(cellCount, [&](uint64_t c) { return cells[c].bounds; });
-  const float pad = partitionPadding(root);
-  root.lower = root.lower - Vec3f{pad, pad, pad};
-  root.upper = root.upper + Vec3f{pad, pad, pad};
+  const Box3f meshBounds = parallelBounds(cellCount, [&](uint64_t c) { return cells[c].bounds; });
+  const float pad = partitionPadding(meshBounds);
+  const Box3f root = padded(meshBounds, pad);
 
   Partitions parts;
   parts.rootBounds = root;
@@ -227,10 +226,7 @@ Partitions buildPartitions(const MeshView &mesh, uint32_t leafSize) {
       leaf.merge(local[i]);
     // Shrunk to the cells it holds, within the leaf (paper §2.2); padded as the root is, since the leaf's own
     // t-interval clips it at render time.
-    Box3f shrunk = intersection(leaf.cells, parts.bounds[i]);
-    shrunk.lower = shrunk.lower - Vec3f{pad, pad, pad};
-    shrunk.upper = shrunk.upper + Vec3f{pad, pad, pad};
-    parts.bounds[i] = shrunk;
+    parts.bounds[i] = padded(intersection(leaf.cells, parts.bounds[i]), pad);
     parts.valueMin[i] = leaf.valueMin;
     parts.valueMax[i] = leaf.valueMax;
     parts.cellCounts[i] = leaf.count;

@@ -67,6 +67,11 @@ UVR_HOST_DEVICE inline Box3f intersection(const Box3f &a, const Box3f &b) {
   return {vmax(a.lower, b.lower), vmin(a.upper, b.upper)};
 }
 
+/// `box` grown by `pad` on every side.
+UVR_HOST_DEVICE inline Box3f padded(const Box3f &box, float pad) {
+  return {box.lower - Vec3f{pad, pad, pad}, box.upper + Vec3f{pad, pad, pad}};
+}
+
 /// Ray with a precomputed reciprocal direction for slab tests.
 struct Ray {
   Vec3f origin;

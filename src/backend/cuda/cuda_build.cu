@@ -57,6 +57,12 @@ struct AtomicBox {
 
 __device__ inline uint64_t globalIndex() { return uint64_t(blockIdx.x) * blockDim.x + threadIdx.x; }
 
+__global__ void indicesKernel(uint64_t count, uint32_t *indices) {
+  const uint64_t i = globalIndex();
+  if (i < count)
+    indices[i] = uint32_t(i);
+}
+
 /// Temporary storage for cub's device-wide algorithms, kept across calls.
 class CubScratch {
 public:
@@ -78,7 +84,6 @@ template <typename T> T downloadOne(const T *device) {
 }
 
 // ---- Cell boxes
-// ---------------------------------------------------------------------------------------------
 
 /// The centroid of every cell (partitionCentroid) and, reduced warp by warp into `bounds`, the mesh's box.
 __global__ void centroidsKernel(MeshView mesh, uint64_t cells, Vec3f *centroids, AtomicBox *bounds) {
@@ -100,7 +105,6 @@ __global__ void centroidsKernel(MeshView mesh, uint64_t cells, Vec3f *centroids,
 }
 
 // ---- Tet adjacency
-// ------------------------------------------------------------------------------------------
 
 __global__ void countIncidentKernel(const uint32_t *tets, uint64_t entries, unsigned long long *counts) {
   const uint64_t i = globalIndex();
@@ -127,7 +131,6 @@ __global__ void tetNeighborsKernel(const uint32_t *tets, uint64_t tetCount, cons
 }
 
 // ---- Occupancy grid
-// -----------------------------------------------------------------------------------------
 
 __global__ void occupancyKernel(MeshView mesh, uint64_t cells, OccupancyView grid, Vec3f voxelSize,
                                 unsigned long long *bits) {
@@ -141,17 +144,15 @@ __global__ void occupancyKernel(MeshView mesh, uint64_t cells, OccupancyView gri
 }
 
 // ---- Point-location BVH
-// -------------------------------------------------------------------------------------
 
 __global__ void mortonKernel(const Vec3f *centroids, uint64_t cells, Vec3f origin, Vec3f scale,
-                             uint32_t *codes, uint32_t *ids) {
+                             uint32_t *codes) {
   const uint64_t c = globalIndex();
   if (c >= cells)
     return;
   const Vec3f p = centroids[c] - origin;
   auto cell = [](float v) { return uint32_t(fminf(fmaxf(v, 0.f), 1023.f)); };
   codes[c] = uint32_t(mortonCode(cell(p.x * scale.x), cell(p.y * scale.y), cell(p.z * scale.z)));
-  ids[c] = uint32_t(c);
 }
 
 // A radix tree over the cells in Morton order (Karras 2012, "Maximizing parallelism in the construction of
@@ -272,7 +273,6 @@ __global__ void collapsedBoundsKernel(MeshView mesh, const uint32_t *cellIds, in
 }
 
 // ---- Partitions: the median-split KD-tree, one level at a time
-// ----------------------------------------------
 //
 // The cells are kept in three lists, each sorted by centroid along one axis (ties by cell index). A node's
 // cells occupy the same positions in all three; its median along an axis is the middle of that axis's list,
@@ -282,15 +282,15 @@ __global__ void collapsedBoundsKernel(MeshView mesh, const uint32_t *cellIds, in
 struct LevelNode {
   uint32_t start, count; ///< positions in the sorted lists
   Box3f space;           ///< the node's cell of space
+
+  __device__ uint32_t half() const { return count / 2; } ///< cells that go below the split
+  __device__ bool goesAbove(uint64_t position) const { return position - start >= half(); }
 };
 
-__global__ void axisKeysKernel(const Vec3f *centroids, uint64_t cells, int axis, uint32_t *keys,
-                               uint32_t *ids) {
+__global__ void axisKeysKernel(const Vec3f *centroids, uint64_t cells, int axis, uint32_t *keys) {
   const uint64_t c = globalIndex();
-  if (c >= cells)
-    return;
-  keys[c] = orderedBits(centroids[c][axis]);
-  ids[c] = uint32_t(c);
+  if (c < cells)
+    keys[c] = orderedBits(centroids[c][axis]);
 }
 
 struct SortedLists {
@@ -337,9 +337,8 @@ __global__ void emitKernel(const LevelNode *level, uint32_t count, const KdNode 
     Box3f below = node.space, above = node.space;
     below.upper[int(inner.axis)] = inner.split;
     above.lower[int(inner.axis)] = inner.split;
-    const uint32_t half = node.count / 2;
-    next[2 * rank] = {node.start, half, below};
-    next[2 * rank + 1] = {node.start + half, node.count - half, above};
+    next[2 * rank] = {node.start, node.half(), below};
+    next[2 * rank + 1] = {node.start + node.half(), node.count - node.half(), above};
   } else {
     const uint32_t leaf = leavesBefore + uint32_t(i) - splitRank[i];
     nodes[levelBase + i] = {0.f, KdNode::kLeaf, leaf};
@@ -357,8 +356,7 @@ __global__ void sideKernel(uint64_t cells, const uint32_t *positionNode, const L
   const uint32_t s = positionNode[p];
   if (s == kSettled || !splits[s])
     return;
-  const LevelNode node = level[s];
-  above[lists.axis[decisions[s].axis][p]] = p - node.start >= node.count / 2;
+  above[lists.axis[decisions[s].axis][p]] = level[s].goesAbove(p);
 }
 
 __global__ void aboveFlagsKernel(uint64_t cells, const uint32_t *positionNode, const uint32_t *splits,
@@ -384,7 +382,7 @@ __global__ void partitionListKernel(uint64_t cells, const uint32_t *positionNode
   }
   const LevelNode node = level[s];
   const uint32_t ones = aboveBefore[p] - aboveBefore[node.start];
-  out[above[cell] ? node.start + node.count / 2 + ones : uint32_t(p) - ones] = cell;
+  out[above[cell] ? node.start + node.half() + ones : uint32_t(p) - ones] = cell;
 }
 
 __global__ void advancePositionsKernel(uint64_t cells, uint32_t *positionNode, const LevelNode *level,
@@ -399,8 +397,7 @@ __global__ void advancePositionsKernel(uint64_t cells, uint32_t *positionNode, c
     positionNode[p] = kSettled;
     return;
   }
-  const LevelNode node = level[s];
-  positionNode[p] = 2 * splitRank[s] + (p - node.start >= node.count / 2 ? 1u : 0u);
+  positionNode[p] = 2 * splitRank[s] + (level[s].goesAbove(p) ? 1u : 0u);
 }
 
 /// What a partition gathers from the cells whose boxes touch it, as ordered bits.
@@ -441,10 +438,7 @@ __global__ void finishLeavesKernel(uint32_t leafCount, const LeafAccumulator *le
   if (i >= leafCount)
     return;
   const LeafAccumulator acc = leaves[i];
-  Box3f box = intersection(acc.cells.box(), leafSpace[i]);
-  box.lower = box.lower - Vec3f{pad, pad, pad};
-  box.upper = box.upper + Vec3f{pad, pad, pad};
-  shrunk[i] = box;
+  shrunk[i] = padded(intersection(acc.cells.box(), leafSpace[i]), pad);
   valueMin[i] = fromOrderedBits(acc.valueMin);
   valueMax[i] = fromOrderedBits(acc.valueMax);
   counts[i] = acc.count;
@@ -480,23 +474,18 @@ public:
     if (leafSize_ == 0)
       throw Error("the partition leaf size must be at least 1");
     Progress progress("building acceleration on the GPU", 5);
-    step(
-        "cell centroids", [&] { centroids(); }, progress);
-    step(
-        "tet adjacency", [&] { tetAdjacency(); }, progress);
-    step(
-        "occupancy grid", [&] { occupancy(); }, progress);
-    step(
-        "point-location hierarchy", [&] { bvh(); }, progress);
-    step(
-        "partitions", [&] { partitions(); }, progress);
+    step("cell centroids", &DeviceBuilder::centroids, progress);
+    step("tet adjacency", &DeviceBuilder::tetAdjacency, progress);
+    step("occupancy grid", &DeviceBuilder::occupancy, progress);
+    step("point-location hierarchy", &DeviceBuilder::bvh, progress);
+    step("partitions", &DeviceBuilder::partitions, progress);
     progress.finish();
   }
 
 private:
-  template <typename Work> void step(const char *name, Work &&work, Progress &progress) {
+  void step(const char *name, void (DeviceBuilder::*work)(), Progress &progress) {
     const Timer timer;
-    work();
+    (this->*work)();
     UVR_CUDA_CHECK(cudaGetLastError());
     UVR_CUDA_CHECK(cudaDeviceSynchronize()); // a fault in the step surfaces here
     out_.stepMs.emplace_back(name, timer.milliseconds());
@@ -556,22 +545,33 @@ private:
         reinterpret_cast<unsigned long long *>(out_.occupancyBits.data()));
   }
 
+  /// The cells' indices ordered by `keys` (their low `bits` bits; ties by index) into `order`, and the keys
+  /// in that order into `sortedKeys`.
+  void sortCells(const DeviceBuffer<uint32_t> &keys, int bits, DeviceBuffer<uint32_t> &sortedKeys,
+                 DeviceBuffer<uint32_t> &order) {
+    if (cellIndices_.size() != cells_) {
+      cellIndices_.resize(cells_);
+      indicesKernel<<<cellBlocks(), kBlock>>>(cells_, cellIndices_.data());
+      UVR_CUDA_CHECK(cudaGetLastError());
+    }
+    sortedKeys.resize(cells_);
+    order.resize(cells_);
+    scratch_.run([&](void *storage, size_t &bytes) {
+      return cub::DeviceRadixSort::SortPairs(storage, bytes, keys.data(), sortedKeys.data(),
+                                             cellIndices_.data(), order.data(), int64_t(cells_), 0, bits);
+    });
+  }
+
   void bvh() {
-    DeviceBuffer<uint32_t> codes, sortedCodes, ids;
+    DeviceBuffer<uint32_t> codes, sortedCodes;
     codes.resize(cells_);
-    sortedCodes.resize(cells_);
-    ids.resize(cells_);
-    out_.bvhCellIds.resize(cells_);
     const Vec3f extent = meshBounds_.size();
     auto scaleOf = [](float e) { return e > 0.f ? 1024.f / e : 0.f; };
     mortonKernel<<<cellBlocks(), kBlock>>>(centroids_.data(), cells_, meshBounds_.lower,
                                            {scaleOf(extent.x), scaleOf(extent.y), scaleOf(extent.z)},
-                                           codes.data(), ids.data());
+                                           codes.data());
     UVR_CUDA_CHECK(cudaGetLastError());
-    scratch_.run([&](void *storage, size_t &bytes) {
-      return cub::DeviceRadixSort::SortPairs(storage, bytes, codes.data(), sortedCodes.data(), ids.data(),
-                                             out_.bvhCellIds.data(), int64_t(cells_), 0, 30);
-    });
+    sortCells(codes, 30, sortedCodes, out_.bvhCellIds);
     if (cells_ <= kLeafCells) { // one leaf
       const BvhNode root{meshBounds_, 0, uint32_t(cells_)};
       out_.bvhNodes.upload(&root, 1);
@@ -608,27 +608,20 @@ private:
 
   void partitions() {
     const float pad = partitionPadding(meshBounds_);
-    Box3f root = meshBounds_;
-    root.lower = root.lower - Vec3f{pad, pad, pad};
-    root.upper = root.upper + Vec3f{pad, pad, pad};
+    const Box3f root = padded(meshBounds_, pad);
     out_.rootBounds = root;
 
     // The three sorted lists, and their partitioned copies.
     DeviceBuffer<uint32_t> lists[3], spare[3];
     {
-      DeviceBuffer<uint32_t> keys, sortedKeys, ids;
+      DeviceBuffer<uint32_t> keys, sortedKeys;
       keys.resize(cells_);
-      sortedKeys.resize(cells_);
-      ids.resize(cells_);
       for (int axis = 0; axis < 3; ++axis) {
-        axisKeysKernel<<<cellBlocks(), kBlock>>>(centroids_.data(), cells_, axis, keys.data(), ids.data());
+        axisKeysKernel<<<cellBlocks(), kBlock>>>(centroids_.data(), cells_, axis, keys.data());
         UVR_CUDA_CHECK(cudaGetLastError());
-        lists[axis].resize(cells_);
-        scratch_.run([&](void *storage, size_t &bytes) {
-          return cub::DeviceRadixSort::SortPairs(storage, bytes, keys.data(), sortedKeys.data(), ids.data(),
-                                                 lists[axis].data(), int64_t(cells_));
-        });
+        sortCells(keys, 32, sortedKeys, lists[axis]);
       }
+      cellIndices_.release();
     }
     for (auto &list : spare)
       list.resize(cells_);
@@ -733,6 +726,7 @@ private:
   uint32_t leafSize_;
   DeviceAcceleration &out_;
   DeviceBuffer<Vec3f> centroids_;
+  DeviceBuffer<uint32_t> cellIndices_; // 0, 1, 2, ...: what the sorts order
   Box3f meshBounds_;
   CubScratch scratch_;
 };
