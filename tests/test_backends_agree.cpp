@@ -100,6 +100,7 @@ TEST(BackendsAgree, CudaBuildsTheHostsAccelerationData) {
       EXPECT_EQ(device.occupancy.ny, grid.ny);
       EXPECT_EQ(device.occupancy.nz, grid.nz);
       EXPECT_EQ(device.occupancy.bits, grid.bits);
+      EXPECT_EQ(device.seeds.seeds, buildSeedGrid(view).seeds);
       expectValidBvh(view, device.bvh);
     }
   }

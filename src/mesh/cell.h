@@ -13,6 +13,9 @@ namespace uvr {
 /// by two cells must be found in one of them despite rounding.
 constexpr float kInsideTolerance = 1e-5f;
 
+/// No cell: a cell index that lies past every mesh's last.
+constexpr uint32_t kNoCell = 0xffffffffu;
+
 UVR_HOST_DEVICE inline float det3(Vec3f a, Vec3f b, Vec3f c) { return dot(a, cross(b, c)); }
 
 /// Barycentric weights of `p` in tetrahedron (a, b, c, d), inside or not; false when the cell is flat.
@@ -222,6 +225,29 @@ UVR_HOST_DEVICE inline bool sampleCell(const MeshView &mesh, uint64_t cell, Vec3
     return sampleIsoparametric<6>(mesh, mesh.wedges + 6 * local, cell, p, value);
   local -= mesh.wedgeCount;
   return sampleIsoparametric<8>(mesh, mesh.hexes + 8 * local, cell, p, value);
+}
+
+/// Whether `p` lies in `cell`, as sampleCell decides it; reads no field.
+UVR_HOST_DEVICE inline bool cellContains(const MeshView &mesh, uint64_t cell, Vec3f p) {
+  uint64_t local = cell;
+  if (local < mesh.tetCount) {
+    const uint32_t *v = mesh.tets + 4 * local;
+    float w[4];
+    return tetWeights(mesh.points[v[0]], mesh.points[v[1]], mesh.points[v[2]], mesh.points[v[3]], p, w);
+  }
+  local -= mesh.tetCount;
+  if (local < mesh.pyramidCount) {
+    ShapeFunctions<5> s;
+    return isoparametricWeights<5>(mesh.points, mesh.pyramids + 5 * local, p, s);
+  }
+  local -= mesh.pyramidCount;
+  if (local < mesh.wedgeCount) {
+    ShapeFunctions<6> s;
+    return isoparametricWeights<6>(mesh.points, mesh.wedges + 6 * local, p, s);
+  }
+  local -= mesh.wedgeCount;
+  ShapeFunctions<8> s;
+  return isoparametricWeights<8>(mesh.points, mesh.hexes + 8 * local, p, s);
 }
 
 /// Calls `visit(point)` for each corner point of `cell`.

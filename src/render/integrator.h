@@ -5,6 +5,7 @@
 #include "accel/bvh.h"
 #include "accel/occupancy.h"
 #include "accel/partitions.h"
+#include "accel/seed_grid.h"
 #include "core/host_device.h"
 #include "mesh/cell.h"
 #include "render/transfer_function.h"
@@ -32,14 +33,13 @@ struct SceneView {
   MeshView mesh;
   BvhView bvh;
   OccupancyView occupancy;                ///< used by the skipping modes
+  SeedGridView seeds;                     ///< where walks to far samples start
   const uint32_t *tetNeighbors = nullptr; ///< 4 per tet; see buildTetNeighbors
   PartitionsView partitions;
   const float *nodeMaxOpacity = nullptr; ///< per KD node, the maximum over the partitions below
   const float *sigma = nullptr;          ///< per partition, normalised colour deviation
   TransferFunctionView tf;
 };
-
-constexpr uint32_t kNoCell = 0xffffffffu;
 
 /// Steps through tets towards `p`, from `cell` across the face it lies furthest beyond, as long as that
 /// is a tet; on success `cell` holds `p` and `value` the field there.
@@ -66,25 +66,32 @@ UVR_HOST_DEVICE inline bool walkTets(const SceneView &scene, Vec3f p, int maxSte
   return false;
 }
 
-/// Finds the cell holding `p`, starting from `cell` (the previous sample's), and returns the field there.
+/// Finds the cell holding `p` and returns the field there. The walk starts from `cell` (the previous
+/// sample's), or, where `p` lies `far` from it (a step longer than a seed voxel) or there is none, from the
+/// seed of `p`'s voxel. `walkSteps` bounds a walk from `cell`: about 8 per fixed step, since samples lie a
+/// cell or two apart and beyond that the BVH is faster.
 /// `occupancy` rejects points in empty space at once; an empty view leaves every point to the walk and BVH.
-/// `walkSteps` bounds the walk: about 8 per fixed step, since samples lie a cell or two apart and beyond that
-/// the BVH is faster.
 UVR_HOST_DEVICE inline bool locateSample(const SceneView &scene, const OccupancyView &occupancy, Vec3f p,
-                                         int walkSteps, uint32_t &cell, float &value) {
+                                         int walkSteps, bool far, uint32_t &cell, float &value) {
   if (!occupancy.mayHoldCell(p))
     return false;
-  if (cell != kNoCell) {
-    if (scene.tetNeighbors && cell < scene.mesh.tetCount) {
-      if (walkTets(scene, p, walkSteps, cell, value))
-        return true;
-    } else if (sampleCell(scene.mesh, cell, p, value)) {
+  uint32_t start = cell;
+  if (far || start == kNoCell) {
+    if (const uint32_t seed = scene.seeds.seedAt(p); seed != kNoCell) {
+      start = seed;
+      walkSteps = kSeedWalkSteps;
+    }
+  }
+  if (start != kNoCell) {
+    uint32_t found = start;
+    if (scene.tetNeighbors && start < scene.mesh.tetCount ? walkTets(scene, p, walkSteps, found, value)
+                                                          : sampleCell(scene.mesh, start, p, value)) {
+      cell = found;
       return true;
     }
   }
-  const uint32_t previous = cell;
   return findCell(scene.bvh, p, [&](uint32_t candidate) {
-    if (candidate == previous || !sampleCell(scene.mesh, candidate, p, value))
+    if (candidate == start || !sampleCell(scene.mesh, candidate, p, value))
       return false;
     cell = candidate;
     return true;
@@ -131,11 +138,12 @@ UVR_HOST_DEVICE inline RayResult integrateRay(const SceneView &scene, const Inte
     // overlap nor leave gaps at partition boundaries (with step s1 nothing changes).
     const float kEnd = gridIndex(tb);
     const float stride = step / s1;
-    const int walkSteps = 8 * int(ceilf(stride)); // a longer step crosses proportionally more tets
+    const int walkSteps = 8 * int(ceilf(stride));  // a longer step crosses proportionally more tets
+    const bool far = step > scene.seeds.voxelEdge; // the seed lies nearer than the previous sample
     for (float t = tEnter + k * s1; t < tb; k += stride, t = tEnter + k * s1) {
       ++result.samples;
       float value;
-      if (!locateSample(scene, occupancy, ray.at(t), walkSteps, cell, value))
+      if (!locateSample(scene, occupancy, ray.at(t), walkSteps, far, cell, value))
         continue;
       if (first) {
         hint = cell;

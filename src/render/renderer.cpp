@@ -61,6 +61,7 @@ const HostAcceleration &Renderer::host() const {
     auto built = std::make_unique<HostAcceleration>();
     built->bvh = buildBvh(meshView_);
     built->occupancy = buildOccupancyGrid(meshView_);
+    built->seeds = buildSeedGrid(meshView_);
     built->tetNeighbors = buildTetNeighbors(mesh_);
     built->partitions = buildPartitions(meshView_, leafSize_);
     hostBuildMs_ = timer.milliseconds();
@@ -104,6 +105,7 @@ SceneView Renderer::sceneView() const {
   scene.mesh = meshView_;
   scene.bvh = accel.bvh.view();
   scene.occupancy = accel.occupancy.view();
+  scene.seeds = accel.seeds.view();
   scene.tetNeighbors = accel.tetNeighbors.empty() ? nullptr : accel.tetNeighbors.data();
   scene.partitions = accel.partitions.view();
   const PartitionMetadata &meta = metadata();

@@ -5,6 +5,7 @@
 #include "accel/bvh.h"
 #include "accel/occupancy.h"
 #include "accel/partitions.h"
+#include "accel/seed_grid.h"
 #include "image/image.h"
 #include "mesh/mesh.h"
 #include "render/camera.h"
@@ -44,6 +45,7 @@ struct PixelTarget;
 struct HostAcceleration {
   Bvh bvh;
   OccupancyGrid occupancy;
+  SeedGrid seeds;
   std::vector<uint32_t> tetNeighbors;
   Partitions partitions;
 };
@@ -60,8 +62,8 @@ struct Frame {
 class Renderer {
 public:
   /// Renders field `fieldIndex` of `mesh`, which must outlive the renderer. The acceleration data (tet
-  /// adjacency, point-location hierarchy, occupancy grid, partitions of up to `leafSize` cells) is built
-  /// where a backend first needs it: on the host for the CPU, on the GPU for CUDA.
+  /// adjacency, point-location hierarchy, occupancy and seed grids, partitions of up to `leafSize` cells) is
+  /// built where a backend first needs it: on the host for the CPU, on the GPU for CUDA.
   Renderer(const Mesh &mesh, int fieldIndex, uint32_t leafSize = kDefaultLeafSize);
   ~Renderer();
 

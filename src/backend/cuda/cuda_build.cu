@@ -143,6 +143,17 @@ __global__ void occupancyKernel(MeshView mesh, uint64_t cells, OccupancyView gri
   });
 }
 
+// ---- Seed grid
+
+__global__ void seedKernel(MeshView mesh, uint64_t cells, SeedGridView grid, Vec3f voxelSize,
+                           uint32_t *seeds) {
+  const uint64_t c = globalIndex();
+  if (c >= cells)
+    return;
+  forEachSeededVoxel(mesh, c, grid, voxelSize,
+                     [&](uint64_t voxel) { atomicMin(seeds + voxel, uint32_t(c)); });
+}
+
 // ---- Point-location BVH
 
 __global__ void mortonKernel(const Vec3f *centroids, uint64_t cells, Vec3f origin, Vec3f scale,
@@ -473,10 +484,11 @@ public:
       throw Error("more than 2^32 - 1 cells are not supported by the GPU build");
     if (leafSize_ == 0)
       throw Error("the partition leaf size must be at least 1");
-    Progress progress("building acceleration on the GPU", 5);
+    Progress progress("building acceleration on the GPU", 6);
     step("cell centroids", &DeviceBuilder::centroids, progress);
     step("tet adjacency", &DeviceBuilder::tetAdjacency, progress);
     step("occupancy grid", &DeviceBuilder::occupancy, progress);
+    step("seed grid", &DeviceBuilder::seeds, progress);
     step("point-location hierarchy", &DeviceBuilder::bvh, progress);
     step("partitions", &DeviceBuilder::partitions, progress);
     progress.finish();
@@ -543,6 +555,16 @@ private:
     occupancyKernel<<<cellBlocks(), kBlock>>>(
         mesh_, cells_, out_.occupancy, shape.voxelSize,
         reinterpret_cast<unsigned long long *>(out_.occupancyBits.data()));
+  }
+
+  void seeds() {
+    const SeedGrid shape = seedGridShape(meshBounds_, cells_, kDefaultSeedVoxelsPerCell);
+    out_.seedCells.resize(shape.voxelCount());
+    UVR_CUDA_CHECK(cudaMemset(out_.seedCells.data(), 0xff, out_.seedCells.bytes())); // kNoCell
+    out_.seeds = shape.view();
+    out_.seeds.seeds = out_.seedCells.data();
+    out_.seedVoxelSize = shape.voxelSize;
+    seedKernel<<<cellBlocks(), kBlock>>>(mesh_, cells_, out_.seeds, shape.voxelSize, out_.seedCells.data());
   }
 
   /// The cells' indices ordered by `keys` (their low `bits` bits; ties by index) into `order`, and the keys

@@ -1,13 +1,15 @@
 // The acceleration data built on the GPU from the mesh already there: tet adjacency, the point-location
-// BVH, the occupancy grid and the partitions. The per-cell steps are the host build's own functions; what
-// differs is how the work is spread (sorts and scans instead of recursion). The tet adjacency, the occupancy
-// grid and the partitions come out as the host builds them (the KD-tree's nodes laid out level by level
-// rather than depth first); the BVH is a radix tree over the cells in Morton order, the host's is Embree's.
+// BVH, the occupancy and seed grids and the partitions. The per-cell steps are the host build's own
+// functions; what differs is how the work is spread (sorts and scans instead of recursion). The tet
+// adjacency, the occupancy and seed grids and the partitions come out as the host builds them (the KD-tree's
+// nodes laid out level by level rather than depth first); the BVH is a radix tree over the cells in Morton
+// order, the host's is Embree's.
 #pragma once
 
 #include "accel/bvh.h"
 #include "accel/occupancy.h"
 #include "accel/partitions.h"
+#include "accel/seed_grid.h"
 #include "backend/cuda/device_buffer.cuh"
 #include "mesh/mesh_view.h"
 
@@ -25,6 +27,9 @@ struct DeviceAcceleration {
   DeviceBuffer<uint64_t> occupancyBits;
   OccupancyView occupancy; ///< device pointer to occupancyBits
   Vec3f voxelSize;
+  DeviceBuffer<uint32_t> seedCells;
+  SeedGridView seeds; ///< device pointer to seedCells
+  Vec3f seedVoxelSize;
   DeviceBuffer<KdNode> kdNodes;
   DeviceBuffer<Box3f> nodeBounds;
   DeviceBuffer<float> valueMin, valueMax;
@@ -36,7 +41,8 @@ struct DeviceAcceleration {
 
   size_t bytes() const {
     return tetNeighbors.bytes() + bvhNodes.bytes() + bvhCellIds.bytes() + occupancyBits.bytes() +
-           kdNodes.bytes() + nodeBounds.bytes() + valueMin.bytes() + valueMax.bytes() + cellCounts.bytes();
+           seedCells.bytes() + kdNodes.bytes() + nodeBounds.bytes() + valueMin.bytes() + valueMax.bytes() +
+           cellCounts.bytes();
   }
 };
 

@@ -47,7 +47,7 @@ __global__ void __launch_bounds__(kRenderBlockWidth *kRenderBlockHeight, 5)
   const int y = int(blockIdx.y * blockDim.y + threadIdx.y);
   if (x >= target.width || y >= height)
     return;
-  uint32_t hint = kNoCell; // no neighbouring ray to start from: the BVH finds the first cell
+  uint32_t hint = kNoCell; // no neighbouring ray to start from: the seed grid finds the first cell
   target.store(x, y, integrateRay(scene, settings, camera.ray(x, y), hint));
 }
 
@@ -184,6 +184,7 @@ CudaRenderer::CudaRenderer(const MeshView &mesh, uint64_t pointCount, uint32_t l
   scene.tetNeighbors = accel.tetNeighbors.size() > 0 ? accel.tetNeighbors.data() : nullptr;
   scene.bvh = {accel.bvhNodes.data(), accel.bvhCellIds.data()};
   scene.occupancy = accel.occupancy;
+  scene.seeds = accel.seeds;
   const uint32_t nodeCount = uint32_t(accel.kdNodes.size()), partitionCount = accel.partitionCount;
   scene.partitions = {accel.kdNodes.data(),  accel.nodeBounds.data(), accel.valueMin.data(),
                       accel.valueMax.data(), accel.rootBounds,        partitionCount};
@@ -312,6 +313,14 @@ HostAcceleration CudaRenderer::acceleration() const {
   grid.nx = accel.occupancy.nx;
   grid.ny = accel.occupancy.ny;
   grid.nz = accel.occupancy.nz;
+  SeedGrid &seeds = out.seeds;
+  seeds.seeds = copy(accel.seedCells);
+  seeds.origin = accel.seeds.origin;
+  seeds.voxelsPerUnit = accel.seeds.voxelsPerUnit;
+  seeds.voxelSize = accel.seedVoxelSize;
+  seeds.nx = accel.seeds.nx;
+  seeds.ny = accel.seeds.ny;
+  seeds.nz = accel.seeds.nz;
   Partitions &parts = out.partitions;
   parts.nodes = copy(accel.kdNodes);
   parts.nodeBounds = copy(accel.nodeBounds);

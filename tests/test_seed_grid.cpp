@@ -1,0 +1,59 @@
+#include "accel/seed_grid.h"
+#include "mesh/cell.h"
+#include "mesh/mesh.h"
+#include "mesh/mesh_view.h"
+#include "mesh/procedural_mesh.h"
+
+#include <gtest/gtest.h>
+
+#include <utility>
+#include <vector>
+
+using namespace uvr;
+
+// Each voxel's seed is, by brute force over all cells, the lowest-numbered cell holding the voxel's centre,
+// or none where no cell does.
+TEST(SeedGrid, SeedsEachVoxelWithTheLowestCellHoldingItsCentre) {
+  for (CellType type : {CellType::Tetra, CellType::Hexahedron, CellType::Wedge, CellType::Pyramid}) {
+    // Jittered, and cut along a diagonal: the staircase leaves some voxel centres in no cell.
+    Mesh mesh =
+        buildMesh(makeBoxGrid(
+                      type, 5, {{-1.f, -1.f, -1.f}, {1.f, 2.f, 1.f}}, [](Vec3f p) { return p.x; }, 0.3f),
+                  "box");
+    for (auto [cells, corners] :
+         {std::pair{&mesh.tets, 4}, {&mesh.pyramids, 5}, {&mesh.wedges, 6}, {&mesh.hexes, 8}}) {
+      std::vector<uint32_t> kept;
+      for (size_t c = 0; c < cells->size(); c += size_t(corners)) {
+        float sum = 0.f;
+        for (int i = 0; i < corners; ++i)
+          sum += mesh.points[(*cells)[c + size_t(i)]].x + mesh.points[(*cells)[c + size_t(i)]].y;
+        if (sum / float(corners) < 0.8f)
+          kept.insert(kept.end(), cells->begin() + long(c), cells->begin() + long(c) + corners);
+      }
+      *cells = std::move(kept);
+    }
+    const MeshView view = makeMeshView(mesh, -1);
+    const SeedGrid grid = buildSeedGrid(view, 3.f);
+    ASSERT_EQ(grid.seeds.size(), grid.voxelCount());
+    ASSERT_GT(grid.voxelCount(), view.cellCount());
+    uint64_t seeded = 0, empty = 0;
+    for (int z = 0; z < grid.nz; ++z)
+      for (int y = 0; y < grid.ny; ++y)
+        for (int x = 0; x < grid.nx; ++x) {
+          const Vec3f centre{grid.origin.x + (float(x) + 0.5f) * grid.voxelSize.x,
+                             grid.origin.y + (float(y) + 0.5f) * grid.voxelSize.y,
+                             grid.origin.z + (float(z) + 0.5f) * grid.voxelSize.z};
+          uint32_t expected = kNoCell;
+          for (uint64_t c = 0; c < view.cellCount() && expected == kNoCell; ++c)
+            if (cellContains(view, c, centre))
+              expected = uint32_t(c);
+          const uint64_t voxel =
+              (uint64_t(z) * uint64_t(grid.ny) + uint64_t(y)) * uint64_t(grid.nx) + uint64_t(x);
+          ASSERT_EQ(grid.seeds[voxel], expected) << "voxel " << x << " " << y << " " << z;
+          EXPECT_EQ(grid.view().seedAt(centre), expected);
+          (expected == kNoCell ? empty : seeded) += 1;
+        }
+    EXPECT_GT(seeded, 0u);
+    EXPECT_GT(empty, 0u) << "the cut should leave some centres outside";
+  }
+}
