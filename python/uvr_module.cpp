@@ -332,7 +332,7 @@ public:
       frame = renderer_->render(camera, settings);
       renderMs = timer.milliseconds();
     }
-    lastStats_ = frameStats(mesh_->mesh, *renderer_, settings, frame, renderMs, leafSize_, fieldIndex_);
+    lastStats_ = frameStats(mesh_->mesh, *renderer_, settings, frame, renderMs, fieldIndex_);
     width_ = width;
     height_ = height;
 
@@ -537,7 +537,7 @@ PYBIND11_MODULE(uvr, m) {
       .def(py::init<std::shared_ptr<PyMesh>, const std::optional<std::string> &, const std::string &,
                     uint32_t>(),
            py::arg("mesh"), py::arg("field") = py::none(), py::arg("backend") = "cpu",
-           py::arg("leaf_size") = kDefaultLeafSize)
+           py::arg("leaf_size") = kBackendLeafSize)
       .def("render", &PyRenderer::render, py::arg("camera") = py::none(), py::arg("tf") = py::none(),
            py::arg("mode") = "full", py::arg("s1") = py::none(), py::arg("s2") = py::none(),
            py::arg("p") = py::none(), py::arg("unit") = py::none(),

@@ -69,8 +69,7 @@ void runRender(const RenderCommandOptions &o) {
   if (!o.heatmap.empty())
     writePng(o.heatmap, heatmapImage(frame.samplesPerPixel, settings.width, settings.height));
 
-  nlohmann::json stats =
-      frameStats(mesh, renderer, settings, frame, renderMs, o.view.leafSize, loaded.fieldIndex);
+  nlohmann::json stats = frameStats(mesh, renderer, settings, frame, renderMs, loaded.fieldIndex);
   std::fprintf(stderr, "uvr: %s %dx%d, %llu cells, %u partitions, %.1f samples/pixel, %.1f ms/frame\n",
                modeName(settings.integrator.mode), settings.width, settings.height,
                static_cast<unsigned long long>(mesh.cellCount()), renderer.partitionCount(settings.backend),

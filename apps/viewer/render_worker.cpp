@@ -14,9 +14,8 @@ bool sameColorMap(const ColorMap &a, const ColorMap &b) {
 
 } // namespace
 
-RenderWorker::RenderWorker(Renderer &renderer, const Mesh &mesh, int fieldIndex, uint32_t leafSize,
-                           std::function<void()> wake)
-    : renderer_(renderer), mesh_(mesh), fieldIndex_(fieldIndex), leafSize_(leafSize), wake_(std::move(wake)),
+RenderWorker::RenderWorker(Renderer &renderer, const Mesh &mesh, int fieldIndex, std::function<void()> wake)
+    : renderer_(renderer), mesh_(mesh), fieldIndex_(fieldIndex), wake_(std::move(wake)),
       thread_([this] { loop(); }) {}
 
 RenderWorker::~RenderWorker() {
@@ -64,8 +63,7 @@ ViewerFrame RenderWorker::draw(const ViewState &state, uint64_t version, int sca
   renderer_.prepare(settings.backend);
   const Timer timer;
   result.frame = renderer_.render(state.camera, settings);
-  result.stats =
-      frameStats(mesh_, renderer_, settings, result.frame, timer.milliseconds(), leafSize_, fieldIndex_);
+  result.stats = frameStats(mesh_, renderer_, settings, result.frame, timer.milliseconds(), fieldIndex_);
   return result;
 }
 

@@ -41,8 +41,7 @@ public:
   static constexpr std::chrono::milliseconds kSettle{150};
 
   /// `renderer` and `mesh` must outlive the worker; `wake` is called (from the worker) when a frame is ready.
-  RenderWorker(Renderer &renderer, const Mesh &mesh, int fieldIndex, uint32_t leafSize,
-               std::function<void()> wake);
+  RenderWorker(Renderer &renderer, const Mesh &mesh, int fieldIndex, std::function<void()> wake);
   ~RenderWorker();
 
   /// Asks for a frame of `state`; returns its version.
@@ -58,7 +57,6 @@ private:
   Renderer &renderer_;
   const Mesh &mesh_;
   int fieldIndex_;
-  uint32_t leafSize_;
   std::function<void()> wake_;
   std::optional<ColorMap> appliedMap_;
   ValueRange appliedRange_;

@@ -91,7 +91,7 @@ class Viewer {
 public:
   Viewer(const ViewerSetup &setup, GLFWwindow *window)
       : setup_(setup), window_(window), renderer_(*setup.mesh, setup.fieldIndex, setup.leafSize),
-        worker_(renderer_, *setup.mesh, setup.fieldIndex, setup.leafSize, [] { glfwPostEmptyEvent(); }) {
+        worker_(renderer_, *setup.mesh, setup.fieldIndex, [] { glfwPostEmptyEvent(); }) {
     controls_.camera = setup.camera;
     controls_.colorMap = setup.colorMap;
     makeOpacityPointsExplicit(controls_.colorMap);

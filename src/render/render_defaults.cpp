@@ -53,7 +53,7 @@ void checkCamera(const Camera &camera) {
 }
 
 nlohmann::json frameStats(const Mesh &mesh, const Renderer &renderer, const RenderSettings &settings,
-                          const Frame &frame, double renderMs, uint32_t leafSize, int fieldIndex) {
+                          const Frame &frame, double renderMs, int fieldIndex) {
   const IntegratorSettings &is = settings.integrator;
   const double pixels = double(settings.width) * double(settings.height);
   const bool skipping = is.mode == RenderMode::Skip || is.mode == RenderMode::Full;
@@ -74,7 +74,7 @@ nlohmann::json frameStats(const Mesh &mesh, const Renderer &renderer, const Rend
       {"s2", is.s2},
       {"p", is.p},
       {"unit", is.unit},
-      {"leaf_size", leafSize},
+      {"leaf_size", renderer.leafSize(settings.backend)},
       {"field", mesh.fields[size_t(fieldIndex)].name},
       {"range", {renderer.transferFunction().valueMin(), renderer.transferFunction().valueMax()}},
       {"backend", backendName(settings.backend)},

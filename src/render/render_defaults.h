@@ -35,6 +35,6 @@ void checkCamera(const Camera &camera);
 
 /// The statistics of one frame under the keys of `uvr render --stats` (all but load_ms and frames).
 nlohmann::json frameStats(const Mesh &mesh, const Renderer &renderer, const RenderSettings &settings,
-                          const Frame &frame, double renderMs, uint32_t leafSize, int fieldIndex);
+                          const Frame &frame, double renderMs, int fieldIndex);
 
 } // namespace uvr

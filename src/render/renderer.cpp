@@ -6,6 +6,8 @@
 #include "mesh/tet_neighbors.h"
 #include "render/pixel.h"
 
+#include <algorithm>
+
 namespace uvr {
 
 const char *modeName(RenderMode mode) {
@@ -48,8 +50,6 @@ Backend parseBackend(const std::string &name) {
 Renderer::Renderer(const Mesh &mesh, int fieldIndex, uint32_t leafSize) : mesh_(mesh), leafSize_(leafSize) {
   if (fieldIndex < 0 || size_t(fieldIndex) >= mesh.fields.size())
     throw Error("the mesh has no scalar field to render");
-  if (leafSize == 0)
-    throw Error("the partition leaf size must be at least 1");
   meshView_ = makeMeshView(mesh_, fieldIndex);
 }
 
@@ -63,7 +63,7 @@ const HostAcceleration &Renderer::host() const {
     built->occupancy = buildOccupancyGrid(meshView_);
     built->seeds = buildSeedGrid(meshView_);
     built->tetNeighbors = buildTetNeighbors(mesh_);
-    built->partitions = buildPartitions(meshView_, leafSize_);
+    built->partitions = buildPartitions(meshView_, leafSize(Backend::Cpu));
     hostBuildMs_ = timer.milliseconds();
     host_ = std::move(built);
   }
@@ -123,12 +123,22 @@ void Renderer::prepare(Backend backend) const {
   if (cuda_)
     return;
 #ifdef UVR_HAVE_CUDA
-  cuda_ = std::make_shared<CudaRenderer>(meshView_, mesh_.points.size(), leafSize_);
+  cuda_ = std::make_shared<CudaRenderer>(meshView_, mesh_.points.size(), leafSize(Backend::Cuda));
   if (tf_)
     cuda_->setTransferFunction(*tf_);
 #else
   throw Error("this uvr was built without CUDA: use --backend cpu");
 #endif
+}
+
+uint32_t defaultLeafSize(Backend backend, uint64_t cells) {
+  if (backend == Backend::Cpu)
+    return kDefaultLeafSize;
+  return uint32_t(std::clamp<uint64_t>(cells / kDefaultGpuPartitions, kDefaultLeafSize, UINT32_MAX));
+}
+
+uint32_t Renderer::leafSize(Backend backend) const {
+  return leafSize_ != kBackendLeafSize ? leafSize_ : defaultLeafSize(backend, mesh_.cellCount());
 }
 
 uint32_t Renderer::partitionCount(Backend backend) const {

@@ -23,6 +23,11 @@ namespace uvr {
 enum class Backend : uint8_t { Cpu, Cuda };
 
 const char *backendName(Backend backend);
+
+/// A leaf size that asks for each backend's own default (defaultLeafSize).
+constexpr uint32_t kBackendLeafSize = 0;
+/// The most cells per partition that `backend` builds with by default for a mesh of `cells` cells.
+uint32_t defaultLeafSize(Backend backend, uint64_t cells);
 /// Parses cpu|cuda; throws uvr::Error otherwise, and for cuda when this build has no CUDA backend.
 Backend parseBackend(const std::string &name);
 
@@ -63,8 +68,9 @@ class Renderer {
 public:
   /// Renders field `fieldIndex` of `mesh`, which must outlive the renderer. The acceleration data (tet
   /// adjacency, point-location hierarchy, occupancy and seed grids, partitions of up to `leafSize` cells) is
-  /// built where a backend first needs it: on the host for the CPU, on the GPU for CUDA.
-  Renderer(const Mesh &mesh, int fieldIndex, uint32_t leafSize = kDefaultLeafSize);
+  /// built where a backend first needs it: on the host for the CPU, on the GPU for CUDA. kBackendLeafSize
+  /// leaves the leaf size to each backend.
+  Renderer(const Mesh &mesh, int fieldIndex, uint32_t leafSize = kBackendLeafSize);
   ~Renderer();
 
   /// Replaces the transfer function and recomputes the partitions' metadata, on the GPU once CUDA has been
@@ -88,6 +94,8 @@ public:
   /// The host's partitions, built on first use.
   const Partitions &partitions() const;
   uint32_t partitionCount(Backend backend) const;
+  /// The most cells per partition that `backend` builds with.
+  uint32_t leafSize(Backend backend) const;
   /// Milliseconds the acceleration build for `backend` took (on the GPU for CUDA, the mesh's upload
   /// excluded); 0 before it was prepared.
   double buildMs(Backend backend) const;
