@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -100,7 +101,19 @@ TEST(BackendsAgree, CudaBuildsTheHostsAccelerationData) {
       EXPECT_EQ(device.occupancy.ny, grid.ny);
       EXPECT_EQ(device.occupancy.nz, grid.nz);
       EXPECT_EQ(device.occupancy.bits, grid.bits);
-      EXPECT_EQ(device.seeds.seeds, buildSeedGrid(view).seeds);
+      const std::vector<uint32_t> neighbors = buildTetNeighbors(mesh);
+      const SeedGrid seeds = buildSeedGrid(view, neighbors.data());
+      EXPECT_EQ(device.seeds.seeds, seeds.seeds);
+      // The same faces per voxel, in whatever order the atomics filled them.
+      ASSERT_EQ(device.seeds.boundaryStart, seeds.boundaryStart);
+      std::vector<uint32_t> deviceFaces = device.seeds.boundaryFaces, hostFaces = seeds.boundaryFaces;
+      for (size_t v = 0; v + 1 < seeds.boundaryStart.size(); ++v) {
+        const auto first = long(seeds.boundaryStart[v]), last = long(seeds.boundaryStart[v + 1]);
+        std::sort(deviceFaces.begin() + first, deviceFaces.begin() + last);
+        std::sort(hostFaces.begin() + first, hostFaces.begin() + last);
+      }
+      EXPECT_EQ(deviceFaces, hostFaces);
+      EXPECT_EQ(seeds.boundaryFaces.empty(), type != CellType::Tetra);
       expectValidBvh(view, device.bvh);
     }
   }

@@ -3,9 +3,11 @@
 #include "mesh/mesh.h"
 #include "mesh/mesh_view.h"
 #include "mesh/procedural_mesh.h"
+#include "mesh/tet_neighbors.h"
 
 #include <gtest/gtest.h>
 
+#include <random>
 #include <utility>
 #include <vector>
 
@@ -33,7 +35,7 @@ TEST(SeedGrid, SeedsEachVoxelWithTheLowestCellHoldingItsCentre) {
       *cells = std::move(kept);
     }
     const MeshView view = makeMeshView(mesh, -1);
-    const SeedGrid grid = buildSeedGrid(view, 3.f);
+    const SeedGrid grid = buildSeedGrid(view, nullptr, 3.f);
     ASSERT_EQ(grid.seeds.size(), grid.voxelCount());
     ASSERT_GT(grid.voxelCount(), view.cellCount());
     uint64_t seeded = 0, empty = 0;
@@ -56,4 +58,57 @@ TEST(SeedGrid, SeedsEachVoxelWithTheLowestCellHoldingItsCentre) {
     EXPECT_GT(seeded, 0u);
     EXPECT_GT(empty, 0u) << "the cut should leave some centres outside";
   }
+}
+
+// The boundary faces' parity never calls a point in a cell outside, and calls most points outside the cells
+// so.
+TEST(SeedGrid, BoundaryFacesTellPointsOutsideTheMesh) {
+  // A jittered lattice of tets cut along a diagonal and with a hollow middle: a boundary with concave parts.
+  Mesh mesh = buildMesh(
+      makeBoxGrid(
+          CellType::Tetra, 12, {{-1.f, -1.f, -1.f}, {1.f, 1.f, 1.f}}, [](Vec3f p) { return p.x; }, 0.3f),
+      "box");
+  std::vector<uint32_t> kept;
+  for (size_t c = 0; c < mesh.tets.size(); c += 4) {
+    Vec3f centroid{0.f, 0.f, 0.f};
+    for (int i = 0; i < 4; ++i)
+      centroid = centroid + mesh.points[mesh.tets[c + size_t(i)]] * 0.25f;
+    if (centroid.x + centroid.y < 1.f && dot(centroid, centroid) > 0.2f)
+      kept.insert(kept.end(), mesh.tets.begin() + long(c), mesh.tets.begin() + long(c) + 4);
+  }
+  mesh.tets = std::move(kept);
+  const MeshView view = makeMeshView(mesh, -1);
+  const std::vector<uint32_t> neighbors = buildTetNeighbors(mesh);
+  for (float voxelsPerCell : {0.1f, 0.5f, 2.f}) {
+    const SeedGrid grid = buildSeedGrid(view, neighbors.data(), voxelsPerCell);
+    ASSERT_EQ(grid.boundaryStart.size(), grid.voxelCount() + 1);
+    ASSERT_FALSE(grid.boundaryFaces.empty());
+    const SeedGridView seeds = grid.view();
+    std::mt19937 random(11);
+    std::uniform_real_distribution<float> uniform(-1.f, 1.f);
+    int outside = 0, told = 0;
+    for (int k = 0; k < 6000; ++k) {
+      const Vec3f p{uniform(random), uniform(random), uniform(random)};
+      bool inCell = false;
+      for (uint64_t c = 0; c < view.cellCount() && !inCell; ++c)
+        inCell = cellContains(view, c, p);
+      const bool saysOutside = seeds.outsideMesh(view, p);
+      ASSERT_FALSE(inCell && saysOutside) << p.x << " " << p.y << " " << p.z;
+      outside += !inCell;
+      told += saysOutside;
+    }
+    EXPECT_GT(outside, 600);
+    EXPECT_GT(told, outside * 9 / 10) << voxelsPerCell << " voxels per cell";
+  }
+}
+
+// Meshes with other cells than tets list no faces: their hexahedra's faces need not be flat.
+TEST(SeedGrid, ListsNoFacesBesideOtherCells) {
+  const Mesh mesh = buildMesh(
+      makeBoxGrid(CellType::Hexahedron, 4, {{0.f, 0.f, 0.f}, {1.f, 1.f, 1.f}}, [](Vec3f p) { return p.x; }),
+      "box");
+  const std::vector<uint32_t> neighbors = buildTetNeighbors(mesh);
+  const SeedGrid grid = buildSeedGrid(makeMeshView(mesh, -1), neighbors.data());
+  EXPECT_TRUE(grid.boundaryStart.empty());
+  EXPECT_FALSE(grid.view().outsideMesh(makeMeshView(mesh, -1), Vec3f{0.5f, 0.5f, 0.5f}));
 }

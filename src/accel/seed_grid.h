@@ -1,7 +1,12 @@
-// Where point location starts for a sample far from the last one: per voxel of a coarse grid over the mesh
-// bounds, a cell holding the voxel's centre. A walk from the previous sample's cell crosses every cell in
-// between, so with steps of many cells (adaptive sampling) it would cost as much as the samples it saves;
-// from the seed it crosses a cell or two wherever the sample lies. Flat arrays, usable on host and device.
+// Where point location starts for a sample far from the last one, and which samples lie provably outside the
+// mesh. Per voxel of a coarse grid over the mesh bounds: a seed, a cell holding the voxel's centre; and, for
+// tet meshes, the boundary faces (tet faces with no neighbour) that reach into the voxel.
+//
+// A walk from the previous sample's cell crosses every cell in between, so with steps of many cells (adaptive
+// sampling) it would cost as much as the samples it saves; from the seed it crosses a cell or two. And a
+// sample whose walk leaves the mesh would take a BVH query that, near the surface, mostly finds nothing and
+// keeps a GPU warp waiting; the parity of the boundary faces between the voxel's centre and the sample says
+// "outside" at the cost of a few triangle tests. Flat arrays, usable on host and device.
 #pragma once
 
 #include "core/host_device.h"
@@ -17,57 +22,137 @@ namespace uvr {
 /// A walk from a seed crosses a cell or two; a few more leave room for slivers.
 constexpr int kSeedWalkSteps = 8;
 
+/// Whether the segment q0-q1 crosses triangle abc: 1 if it does, 0 if not, -1 where an end lies within
+/// `tolerance` of the triangle's plane or the crossing within a relative 1e-4 of an edge (too close to call).
+UVR_HOST_DEVICE inline int segmentCrossesTriangle(Vec3f q0, Vec3f q1, Vec3f a, Vec3f b, Vec3f c,
+                                                  float tolerance) {
+  const Vec3f n = cross(b - a, c - a);
+  const float d0 = dot(n, q0 - a), d1 = dot(n, q1 - a);
+  const float planeTolerance = tolerance * length(n);
+  if ((d0 > planeTolerance && d1 > planeTolerance) || (d0 < -planeTolerance && d1 < -planeTolerance))
+    return 0;
+  if (!(fabsf(d0) > planeTolerance && fabsf(d1) > planeTolerance))
+    return -1; // also a flat triangle (n = 0)
+  const Vec3f x = q0 + (q1 - q0) * (d0 / (d0 - d1));
+  // Twice the signed areas of x with each edge, along n: all positive inside.
+  const float w0 = dot(n, cross(b - x, c - x)), w1 = dot(n, cross(c - x, a - x)),
+              w2 = dot(n, cross(a - x, b - x));
+  const float edgeTolerance = 1e-4f * dot(n, n);
+  if (w0 < -edgeTolerance || w1 < -edgeTolerance || w2 < -edgeTolerance)
+    return 0;
+  return w0 > edgeTolerance && w1 > edgeTolerance && w2 > edgeTolerance ? 1 : -1;
+}
+
 struct SeedGridView {
   const uint32_t *seeds = nullptr; ///< per voxel, x fastest; kNoCell where no cell holds the centre
+  /// Per voxel and one more, where its faces begin in `boundaryFaces`; null where they are not listed (meshes
+  /// with other cells than tets).
+  const uint32_t *boundaryStart = nullptr;
+  const uint32_t *boundaryFaces = nullptr; ///< 4 * tet + i, face i being the one opposite corner i
   Vec3f origin;
   Vec3f voxelsPerUnit;
+  Vec3f voxelSize; ///< the extent over the voxel count, per axis
   int nx = 0, ny = 0, nz = 0;
-  float voxelEdge = 0.f; ///< the longest side of a voxel
 
-  /// The seed of the voxel holding `p`, or kNoCell (also outside the grid, and without a grid).
-  UVR_HOST_DEVICE uint32_t seedAt(Vec3f p) const {
+  UVR_HOST_DEVICE float voxelEdge() const { return maxf(voxelSize.x, maxf(voxelSize.y, voxelSize.z)); }
+
+  /// The voxel holding `p`; false outside the grid, and without one.
+  UVR_HOST_DEVICE bool voxelOf(Vec3f p, int &x, int &y, int &z) const {
     if (!seeds)
-      return kNoCell;
+      return false;
     const float fx = (p.x - origin.x) * voxelsPerUnit.x, fy = (p.y - origin.y) * voxelsPerUnit.y,
                 fz = (p.z - origin.z) * voxelsPerUnit.z;
     if (!(fx >= 0.f && fy >= 0.f && fz >= 0.f)) // also rejects NaN
-      return kNoCell;
-    const int x = int(fx), y = int(fy), z = int(fz);
-    if (x >= nx || y >= ny || z >= nz)
-      return kNoCell;
-    return seeds[(uint64_t(z) * uint64_t(ny) + uint64_t(y)) * uint64_t(nx) + uint64_t(x)];
+      return false;
+    x = int(fx), y = int(fy), z = int(fz);
+    return x < nx && y < ny && z < nz;
+  }
+  UVR_HOST_DEVICE uint64_t index(int x, int y, int z) const {
+    return (uint64_t(z) * uint64_t(ny) + uint64_t(y)) * uint64_t(nx) + uint64_t(x);
+  }
+  UVR_HOST_DEVICE Vec3f centre(int x, int y, int z) const {
+    return {origin.x + (float(x) + 0.5f) * voxelSize.x, origin.y + (float(y) + 0.5f) * voxelSize.y,
+            origin.z + (float(z) + 0.5f) * voxelSize.z};
+  }
+
+  /// The seed of the voxel holding `p`, or kNoCell (also outside the grid, and without a grid).
+  UVR_HOST_DEVICE uint32_t seedAt(Vec3f p) const {
+    int x, y, z;
+    return voxelOf(p, x, y, z) ? seeds[index(x, y, z)] : kNoCell;
+  }
+
+  /// True only where `p` lies in no cell of `mesh`: its voxel's centre is inside exactly when it has a seed,
+  /// and each boundary face that the segment from there to `p` crosses flips that. False where that is not
+  /// known (no face lists, outside the grid, a crossing too close to call).
+  UVR_HOST_DEVICE bool outsideMesh(const MeshView &mesh, Vec3f p) const {
+    int x, y, z;
+    if (!boundaryStart || !voxelOf(p, x, y, z))
+      return false;
+    const uint64_t voxel = index(x, y, z);
+    const Vec3f from = centre(x, y, z);
+    const float tolerance = 1e-4f * voxelEdge();
+    bool inside = seeds[voxel] != kNoCell;
+    for (uint32_t i = boundaryStart[voxel]; i < boundaryStart[voxel + 1]; ++i) {
+      const uint32_t face = boundaryFaces[i];
+      const uint32_t *v = mesh.tets + 4 * uint64_t(face >> 2);
+      const uint32_t k = face & 3u;
+      const int crossing =
+          segmentCrossesTriangle(from, p, mesh.points[v[(k + 1) & 3u]], mesh.points[v[(k + 2) & 3u]],
+                                 mesh.points[v[(k + 3) & 3u]], tolerance);
+      if (crossing < 0)
+        return false;
+      inside ^= crossing == 1;
+    }
+    return !inside;
   }
 };
 
 struct SeedGrid {
   std::vector<uint32_t> seeds;
+  std::vector<uint32_t> boundaryStart, boundaryFaces; ///< empty where not listed
   Vec3f origin, voxelsPerUnit;
   Vec3f voxelSize; ///< the extent over the voxel count, per axis
   int nx = 0, ny = 0, nz = 0;
 
   SeedGridView view() const {
-    return {
-        seeds.data(), origin, voxelsPerUnit, nx, ny, nz, maxf(voxelSize.x, maxf(voxelSize.y, voxelSize.z))};
+    return {seeds.data(),
+            boundaryStart.empty() ? nullptr : boundaryStart.data(),
+            boundaryFaces.data(),
+            origin,
+            voxelsPerUnit,
+            voxelSize,
+            nx,
+            ny,
+            nz};
   }
   uint64_t voxelCount() const { return uint64_t(nx) * uint64_t(ny) * uint64_t(nz); }
-  size_t memoryBytes() const { return seeds.size() * sizeof(uint32_t); }
+  size_t memoryBytes() const {
+    return (seeds.size() + boundaryStart.size() + boundaryFaces.size()) * sizeof(uint32_t);
+  }
 };
 
-/// About `voxelsPerCell` voxels per cell over the mesh bounds, 4 bytes each. The default keeps a walk from a
-/// seed to a few cells on the brain meshes, whose cells fill about half their bounds.
+/// About `voxelsPerCell` voxels per cell over the mesh bounds, 4 bytes each and 4 more for the face lists.
+/// The default keeps a walk from a seed to a few cells on the brain meshes, whose cells fill about half their
+/// bounds.
 constexpr float kDefaultSeedVoxelsPerCell = 0.5f;
 
-/// The grid with its seeds: each voxel's is the lowest-numbered cell holding its centre, so that any build
-/// order gives the same grid.
-SeedGrid buildSeedGrid(const MeshView &mesh, float voxelsPerCell = kDefaultSeedVoxelsPerCell);
+/// The grid with its seeds (each voxel's is the lowest-numbered cell holding its centre, so that any build
+/// order gives the same grid) and, for a mesh of tets alone with `tetNeighbors` given, its boundary faces.
+SeedGrid buildSeedGrid(const MeshView &mesh, const uint32_t *tetNeighbors,
+                       float voxelsPerCell = kDefaultSeedVoxelsPerCell);
 
 /// The grid's placement and shape for a mesh of `cells` cells within `bounds`; no seeds allocated.
 SeedGrid seedGridShape(const Box3f &bounds, uint64_t cells, float voxelsPerCell);
 
+/// Whether the grid lists boundary faces for `mesh`: tets alone, few enough to number their faces in 32 bits.
+UVR_HOST_DEVICE inline bool listsBoundaryFaces(const MeshView &mesh) {
+  return mesh.cellCount() == mesh.tetCount && mesh.tetCount <= (uint64_t(1) << 30);
+}
+
 /// Calls `offer(voxel)` for each voxel of `grid` whose centre lies in cell `c`.
 template <typename Offer>
 UVR_HOST_DEVICE void forEachSeededVoxel(const MeshView &mesh, uint64_t c, const SeedGridView &grid,
-                                        Vec3f voxelSize, Offer &&offer) {
+                                        Offer &&offer) {
   const Box3f box = cellBounds(mesh, c);
   // Voxel i's centre is origin + (i + 1/2) * size: the indices whose centres lie within the box, with a
   // hundredth of a voxel's slack against rounding (the test below is exact).
@@ -83,13 +168,36 @@ UVR_HOST_DEVICE void forEachSeededVoxel(const MeshView &mesh, uint64_t c, const 
   span(box.lower.z, box.upper.z, grid.origin.z, grid.voxelsPerUnit.z, grid.nz, z0, z1);
   for (int z = z0; z <= z1; ++z)
     for (int y = y0; y <= y1; ++y)
-      for (int x = x0; x <= x1; ++x) {
-        const Vec3f centre{grid.origin.x + (float(x) + 0.5f) * voxelSize.x,
-                           grid.origin.y + (float(y) + 0.5f) * voxelSize.y,
-                           grid.origin.z + (float(z) + 0.5f) * voxelSize.z};
-        if (cellContains(mesh, c, centre))
-          offer((uint64_t(z) * uint64_t(grid.ny) + uint64_t(y)) * uint64_t(grid.nx) + uint64_t(x));
-      }
+      for (int x = x0; x <= x1; ++x)
+        if (cellContains(mesh, c, grid.centre(x, y, z)))
+          offer(grid.index(x, y, z));
+}
+
+/// Calls `offer(voxel, face)` for each voxel of `grid` that the box of boundary face `face` (4 * tet + i)
+/// reaches, the box widened by a hundredth of a voxel so that rounding never leaves out a voxel it touches.
+template <typename Offer>
+UVR_HOST_DEVICE void forEachBoundaryVoxel(const MeshView &mesh, uint32_t face, const SeedGridView &grid,
+                                          Offer &&offer) {
+  const uint32_t *v = mesh.tets + 4 * uint64_t(face >> 2);
+  const uint32_t k = face & 3u;
+  Box3f box;
+  box.extend(mesh.points[v[(k + 1) & 3u]]);
+  box.extend(mesh.points[v[(k + 2) & 3u]]);
+  box.extend(mesh.points[v[(k + 3) & 3u]]);
+  auto span = [](float lo, float hi, float origin, float scale, int count, int &first, int &last) {
+    first = int(floorf((lo - origin) * scale - 0.01f));
+    last = int(floorf((hi - origin) * scale + 0.01f));
+    first = first < 0 ? 0 : first;
+    last = last > count - 1 ? count - 1 : last;
+  };
+  int x0, x1, y0, y1, z0, z1;
+  span(box.lower.x, box.upper.x, grid.origin.x, grid.voxelsPerUnit.x, grid.nx, x0, x1);
+  span(box.lower.y, box.upper.y, grid.origin.y, grid.voxelsPerUnit.y, grid.ny, y0, y1);
+  span(box.lower.z, box.upper.z, grid.origin.z, grid.voxelsPerUnit.z, grid.nz, z0, z1);
+  for (int z = z0; z <= z1; ++z)
+    for (int y = y0; y <= y1; ++y)
+      for (int x = x0; x <= x1; ++x)
+        offer(grid.index(x, y, z));
 }
 
 } // namespace uvr

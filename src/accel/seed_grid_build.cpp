@@ -4,7 +4,9 @@
 
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <atomic>
+#include <cstdint>
 
 namespace uvr {
 
@@ -20,7 +22,44 @@ SeedGrid seedGridShape(const Box3f &bounds, uint64_t cells, float voxelsPerCell)
   return grid;
 }
 
-SeedGrid buildSeedGrid(const MeshView &mesh, float voxelsPerCell) {
+namespace {
+
+/// Compressed rows of the boundary faces per voxel: counted, offset by a scan, then filled.
+void listBoundaryFaces(const MeshView &mesh, const uint32_t *tetNeighbors, SeedGrid &grid) {
+  const SeedGridView view = grid.view();
+  auto forEachBoundaryFace = [&](auto &&visit) {
+    tbb::parallel_for(uint64_t(0), mesh.tetCount, [&](uint64_t t) {
+      for (uint32_t i = 0; i < 4; ++i)
+        if (tetNeighbors[4 * t + i] == kNoCell)
+          forEachBoundaryVoxel(mesh, uint32_t(4 * t + i), view,
+                               [&](uint64_t voxel) { visit(voxel, 4 * t + i); });
+    });
+  };
+  std::vector<uint32_t> counts(grid.voxelCount(), 0);
+  forEachBoundaryFace([&](uint64_t voxel, uint64_t) {
+    std::atomic_ref<uint32_t>(counts[voxel]).fetch_add(1, std::memory_order_relaxed);
+  });
+  std::vector<uint32_t> start(counts.size() + 1);
+  uint64_t total = 0;
+  for (size_t v = 0; v < counts.size(); ++v) {
+    start[v] = uint32_t(total);
+    total += counts[v];
+    if (total > UINT32_MAX)
+      return; // too many to number in 32 bits: no lists, every such sample goes to the BVH
+  }
+  start.back() = uint32_t(total);
+  std::vector<uint32_t> faces(total);
+  std::copy(start.begin(), start.end() - 1, counts.begin()); // each voxel's next free slot
+  forEachBoundaryFace([&](uint64_t voxel, uint64_t face) {
+    faces[std::atomic_ref<uint32_t>(counts[voxel]).fetch_add(1, std::memory_order_relaxed)] = uint32_t(face);
+  });
+  grid.boundaryStart = std::move(start);
+  grid.boundaryFaces = std::move(faces);
+}
+
+} // namespace
+
+SeedGrid buildSeedGrid(const MeshView &mesh, const uint32_t *tetNeighbors, float voxelsPerCell) {
   const uint64_t cells = mesh.cellCount();
   if (cells == 0)
     return {};
@@ -29,7 +68,7 @@ SeedGrid buildSeedGrid(const MeshView &mesh, float voxelsPerCell) {
   grid.seeds.assign(grid.voxelCount(), kNoCell);
   const SeedGridView view = grid.view();
   tbb::parallel_for(uint64_t(0), cells, [&](uint64_t c) {
-    forEachSeededVoxel(mesh, c, view, grid.voxelSize, [&](uint64_t voxel) {
+    forEachSeededVoxel(mesh, c, view, [&](uint64_t voxel) {
       // A centre on a shared face lies in several cells: the lowest-numbered one wins.
       std::atomic_ref<uint32_t> seed(grid.seeds[voxel]);
       uint32_t current = seed.load(std::memory_order_relaxed);
@@ -38,6 +77,8 @@ SeedGrid buildSeedGrid(const MeshView &mesh, float voxelsPerCell) {
         ;
     });
   });
+  if (tetNeighbors && listsBoundaryFaces(mesh))
+    listBoundaryFaces(mesh, tetNeighbors, grid);
   return grid;
 }
 

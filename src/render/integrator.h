@@ -69,11 +69,11 @@ UVR_HOST_DEVICE inline bool walkTets(const SceneView &scene, Vec3f p, int maxSte
 /// Finds the cell holding `p` and returns the field there. The walk starts from `cell` (the previous
 /// sample's), or, where `p` lies `far` from it (a step longer than a seed voxel) or there is none, from the
 /// seed of `p`'s voxel. `walkSteps` bounds a walk from `cell`: about 8 per fixed step, since samples lie a
-/// cell or two apart and beyond that the BVH is faster.
-/// `occupancy` rejects points in empty space at once; an empty view leaves every point to the walk and BVH.
-UVR_HOST_DEVICE inline bool locateSample(const SceneView &scene, const OccupancyView &occupancy, Vec3f p,
-                                         int walkSteps, bool far, uint32_t &cell, float &value) {
-  if (!occupancy.mayHoldCell(p))
+/// cell or two apart and beyond that the BVH is faster. With `skipEmpty`, points in empty space are rejected
+/// without the BVH: by the occupancy grid at once, or where the walk fails, by the boundary faces' parity.
+UVR_HOST_DEVICE inline bool locateSample(const SceneView &scene, bool skipEmpty, Vec3f p, int walkSteps,
+                                         bool far, uint32_t &cell, float &value) {
+  if (skipEmpty && !scene.occupancy.mayHoldCell(p))
     return false;
   uint32_t start = cell;
   if (far || start == kNoCell) {
@@ -90,6 +90,8 @@ UVR_HOST_DEVICE inline bool locateSample(const SceneView &scene, const Occupancy
       return true;
     }
   }
+  if (skipEmpty && scene.seeds.outsideMesh(scene.mesh, p))
+    return false;
   return findCell(scene.bvh, p, [&](uint32_t candidate) {
     if (candidate == start || !sampleCell(scene.mesh, candidate, p, value))
       return false;
@@ -117,9 +119,8 @@ UVR_HOST_DEVICE inline RayResult integrateRay(const SceneView &scene, const Inte
 
   const bool skip = settings.mode == RenderMode::Skip || settings.mode == RenderMode::Full;
   const bool adaptive = settings.mode == RenderMode::Adaptive || settings.mode == RenderMode::Full;
-  // The occupancy grid skips empty space voxel by voxel: part of space skipping, so the modes without it
-  // locate every sample the plain way, as the paper's reference ray marcher does.
-  const OccupancyView occupancy = skip ? scene.occupancy : OccupancyView{};
+  // Rejecting samples in empty space is part of space skipping: the modes without it locate every sample the
+  // plain way, as the paper's reference ray marcher does.
   uint32_t cell = hint;
   bool first = true;
   // Marches [ta, tb) with step `step`; false once the ray is opaque.
@@ -138,12 +139,12 @@ UVR_HOST_DEVICE inline RayResult integrateRay(const SceneView &scene, const Inte
     // overlap nor leave gaps at partition boundaries (with step s1 nothing changes).
     const float kEnd = gridIndex(tb);
     const float stride = step / s1;
-    const int walkSteps = 8 * int(ceilf(stride));  // a longer step crosses proportionally more tets
-    const bool far = step > scene.seeds.voxelEdge; // the seed lies nearer than the previous sample
+    const int walkSteps = 8 * int(ceilf(stride));    // a longer step crosses proportionally more tets
+    const bool far = step > scene.seeds.voxelEdge(); // the seed lies nearer than the previous sample
     for (float t = tEnter + k * s1; t < tb; k += stride, t = tEnter + k * s1) {
       ++result.samples;
       float value;
-      if (!locateSample(scene, occupancy, ray.at(t), walkSteps, far, cell, value))
+      if (!locateSample(scene, skip, ray.at(t), walkSteps, far, cell, value))
         continue;
       if (first) {
         hint = cell;

@@ -61,8 +61,9 @@ const HostAcceleration &Renderer::host() const {
     auto built = std::make_unique<HostAcceleration>();
     built->bvh = buildBvh(meshView_);
     built->occupancy = buildOccupancyGrid(meshView_);
-    built->seeds = buildSeedGrid(meshView_);
     built->tetNeighbors = buildTetNeighbors(mesh_);
+    built->seeds =
+        buildSeedGrid(meshView_, built->tetNeighbors.empty() ? nullptr : built->tetNeighbors.data());
     built->partitions = buildPartitions(meshView_, leafSize(Backend::Cpu));
     hostBuildMs_ = timer.milliseconds();
     host_ = std::move(built);

@@ -8,6 +8,7 @@
 #include "mesh/tet_neighbors.h"
 
 #include <cub/device/device_radix_sort.cuh>
+#include <cub/device/device_reduce.cuh>
 #include <cub/device/device_scan.cuh>
 
 #include <algorithm>
@@ -145,13 +146,25 @@ __global__ void occupancyKernel(MeshView mesh, uint64_t cells, OccupancyView gri
 
 // ---- Seed grid
 
-__global__ void seedKernel(MeshView mesh, uint64_t cells, SeedGridView grid, Vec3f voxelSize,
-                           uint32_t *seeds) {
+__global__ void seedKernel(MeshView mesh, uint64_t cells, SeedGridView grid, uint32_t *seeds) {
   const uint64_t c = globalIndex();
   if (c >= cells)
     return;
-  forEachSeededVoxel(mesh, c, grid, voxelSize,
-                     [&](uint64_t voxel) { atomicMin(seeds + voxel, uint32_t(c)); });
+  forEachSeededVoxel(mesh, c, grid, [&](uint64_t voxel) { atomicMin(seeds + voxel, uint32_t(c)); });
+}
+
+/// Per boundary face of the tets, per voxel its box reaches: counts the face there (`faces` null), or puts it
+/// in the voxel's next free slot (`slots`, advanced; the row's order is arbitrary).
+__global__ void boundaryFacesKernel(MeshView mesh, const uint32_t *tetNeighbors, SeedGridView grid,
+                                    uint32_t *slots, uint32_t *faces) {
+  const uint64_t entry = globalIndex();
+  if (entry >= 4 * mesh.tetCount || tetNeighbors[entry] != kNoCell)
+    return;
+  forEachBoundaryVoxel(mesh, uint32_t(entry), grid, [&](uint64_t voxel) {
+    const uint32_t slot = atomicAdd(slots + voxel, 1u);
+    if (faces)
+      faces[slot] = uint32_t(entry);
+  });
 }
 
 // ---- Point-location BVH
@@ -563,8 +576,41 @@ private:
     UVR_CUDA_CHECK(cudaMemset(out_.seedCells.data(), 0xff, out_.seedCells.bytes())); // kNoCell
     out_.seeds = shape.view();
     out_.seeds.seeds = out_.seedCells.data();
-    out_.seedVoxelSize = shape.voxelSize;
-    seedKernel<<<cellBlocks(), kBlock>>>(mesh_, cells_, out_.seeds, shape.voxelSize, out_.seedCells.data());
+    seedKernel<<<cellBlocks(), kBlock>>>(mesh_, cells_, out_.seeds, out_.seedCells.data());
+    if (listsBoundaryFaces(mesh_))
+      boundaryFaces();
+  }
+
+  /// Compressed rows of the boundary faces per voxel, as the host lists them: counted, offset by a scan, then
+  /// filled.
+  void boundaryFaces() {
+    const uint64_t voxels = out_.seedCells.size(), entries = 4 * mesh_.tetCount;
+    DeviceBuffer<uint32_t> slots;
+    slots.resize(voxels + 1);
+    UVR_CUDA_CHECK(cudaMemset(slots.data(), 0, slots.bytes()));
+    boundaryFacesKernel<<<blocksFor(entries, kBlock), kBlock>>>(mesh_, out_.tetNeighbors.data(), out_.seeds,
+                                                                slots.data(), nullptr);
+    UVR_CUDA_CHECK(cudaGetLastError());
+    // Summed in 64 bits: past 2^32 - 1 entries the rows cannot be numbered, and the grid lists none.
+    DeviceBuffer<unsigned long long> total;
+    total.resize(1);
+    scratch_.run([&](void *storage, size_t &bytes) {
+      return cub::DeviceReduce::Sum(storage, bytes, slots.data(), total.data(), int64_t(voxels));
+    });
+    if (downloadOne(total.data()) > UINT32_MAX)
+      return;
+    out_.boundaryStart.resize(voxels + 1);
+    scratch_.run([&](void *storage, size_t &bytes) {
+      return cub::DeviceScan::ExclusiveSum(storage, bytes, slots.data(), out_.boundaryStart.data(),
+                                           int64_t(voxels + 1));
+    });
+    out_.boundaryFaces.resize(downloadOne(out_.boundaryStart.data() + voxels));
+    UVR_CUDA_CHECK(
+        cudaMemcpy(slots.data(), out_.boundaryStart.data(), slots.bytes(), cudaMemcpyDeviceToDevice));
+    boundaryFacesKernel<<<blocksFor(entries, kBlock), kBlock>>>(mesh_, out_.tetNeighbors.data(), out_.seeds,
+                                                                slots.data(), out_.boundaryFaces.data());
+    out_.seeds.boundaryStart = out_.boundaryStart.data();
+    out_.seeds.boundaryFaces = out_.boundaryFaces.data();
   }
 
   /// The cells' indices ordered by `keys` (their low `bits` bits; ties by index) into `order`, and the keys

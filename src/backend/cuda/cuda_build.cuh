@@ -28,8 +28,8 @@ struct DeviceAcceleration {
   OccupancyView occupancy; ///< device pointer to occupancyBits
   Vec3f voxelSize;
   DeviceBuffer<uint32_t> seedCells;
-  SeedGridView seeds; ///< device pointer to seedCells
-  Vec3f seedVoxelSize;
+  DeviceBuffer<uint32_t> boundaryStart, boundaryFaces; ///< empty where not listed
+  SeedGridView seeds;                                  ///< device pointers to the three
   DeviceBuffer<KdNode> kdNodes;
   DeviceBuffer<Box3f> nodeBounds;
   DeviceBuffer<float> valueMin, valueMax;
@@ -41,8 +41,8 @@ struct DeviceAcceleration {
 
   size_t bytes() const {
     return tetNeighbors.bytes() + bvhNodes.bytes() + bvhCellIds.bytes() + occupancyBits.bytes() +
-           seedCells.bytes() + kdNodes.bytes() + nodeBounds.bytes() + valueMin.bytes() + valueMax.bytes() +
-           cellCounts.bytes();
+           seedCells.bytes() + boundaryStart.bytes() + boundaryFaces.bytes() + kdNodes.bytes() +
+           nodeBounds.bytes() + valueMin.bytes() + valueMax.bytes() + cellCounts.bytes();
   }
 };
 

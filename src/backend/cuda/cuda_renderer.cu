@@ -317,7 +317,9 @@ HostAcceleration CudaRenderer::acceleration() const {
   seeds.seeds = copy(accel.seedCells);
   seeds.origin = accel.seeds.origin;
   seeds.voxelsPerUnit = accel.seeds.voxelsPerUnit;
-  seeds.voxelSize = accel.seedVoxelSize;
+  seeds.voxelSize = accel.seeds.voxelSize;
+  seeds.boundaryStart = copy(accel.boundaryStart);
+  seeds.boundaryFaces = copy(accel.boundaryFaces);
   seeds.nx = accel.seeds.nx;
   seeds.ny = accel.seeds.ny;
   seeds.nz = accel.seeds.nz;
