@@ -43,6 +43,16 @@ UVR_HOST_DEVICE inline int segmentCrossesTriangle(Vec3f q0, Vec3f q1, Vec3f a, V
   return w0 > edgeTolerance && w1 > edgeTolerance && w2 > edgeTolerance ? 1 : -1;
 }
 
+/// The corners of boundary face `face`, numbered 4 * tet + i for the face opposite corner i.
+UVR_HOST_DEVICE inline void tetFaceCorners(const MeshView &mesh, uint32_t face, Vec3f &a, Vec3f &b,
+                                           Vec3f &c) {
+  const uint32_t *v = mesh.tets + 4 * uint64_t(face >> 2);
+  const uint32_t i = face & 3u;
+  a = mesh.points[v[(i + 1) & 3u]];
+  b = mesh.points[v[(i + 2) & 3u]];
+  c = mesh.points[v[(i + 3) & 3u]];
+}
+
 struct SeedGridView {
   const uint32_t *seeds = nullptr; ///< per voxel, x fastest; kNoCell where no cell holds the centre
   /// Per voxel and one more, where its faces begin in `boundaryFaces`; null where they are not listed (meshes
@@ -93,12 +103,9 @@ struct SeedGridView {
     const float tolerance = 1e-4f * voxelEdge();
     bool inside = seeds[voxel] != kNoCell;
     for (uint32_t i = boundaryStart[voxel]; i < boundaryStart[voxel + 1]; ++i) {
-      const uint32_t face = boundaryFaces[i];
-      const uint32_t *v = mesh.tets + 4 * uint64_t(face >> 2);
-      const uint32_t k = face & 3u;
-      const int crossing =
-          segmentCrossesTriangle(from, p, mesh.points[v[(k + 1) & 3u]], mesh.points[v[(k + 2) & 3u]],
-                                 mesh.points[v[(k + 3) & 3u]], tolerance);
+      Vec3f a, b, c;
+      tetFaceCorners(mesh, boundaryFaces[i], a, b, c);
+      const int crossing = segmentCrossesTriangle(from, p, a, b, c, tolerance);
       if (crossing < 0)
         return false;
       inside ^= crossing == 1;
@@ -149,55 +156,56 @@ UVR_HOST_DEVICE inline bool listsBoundaryFaces(const MeshView &mesh) {
   return mesh.cellCount() == mesh.tetCount && mesh.tetCount <= (uint64_t(1) << 30);
 }
 
+/// Calls `visit(x, y, z)` for the voxels of `grid` that `span` picks along each axis for `box`:
+/// `span(lo, hi, first, last)` takes the box's extent in voxel units and gives an index range, clamped here.
+template <typename Span, typename Visit>
+UVR_HOST_DEVICE void forEachVoxelIn(const SeedGridView &grid, const Box3f &box, Span &&span, Visit &&visit) {
+  const int count[3] = {grid.nx, grid.ny, grid.nz};
+  int first[3], last[3];
+  for (int a = 0; a < 3; ++a) {
+    span((box.lower[a] - grid.origin[a]) * grid.voxelsPerUnit[a],
+         (box.upper[a] - grid.origin[a]) * grid.voxelsPerUnit[a], first[a], last[a]);
+    first[a] = first[a] < 0 ? 0 : first[a];
+    last[a] = last[a] > count[a] - 1 ? count[a] - 1 : last[a];
+  }
+  for (int z = first[2]; z <= last[2]; ++z)
+    for (int y = first[1]; y <= last[1]; ++y)
+      for (int x = first[0]; x <= last[0]; ++x)
+        visit(x, y, z);
+}
+
 /// Calls `offer(voxel)` for each voxel of `grid` whose centre lies in cell `c`.
 template <typename Offer>
 UVR_HOST_DEVICE void forEachSeededVoxel(const MeshView &mesh, uint64_t c, const SeedGridView &grid,
                                         Offer &&offer) {
-  const Box3f box = cellBounds(mesh, c);
-  // Voxel i's centre is origin + (i + 1/2) * size: the indices whose centres lie within the box, with a
-  // hundredth of a voxel's slack against rounding (the test below is exact).
-  auto span = [](float lo, float hi, float origin, float scale, int count, int &first, int &last) {
-    first = int(ceilf((lo - origin) * scale - 0.51f));
-    last = int(floorf((hi - origin) * scale - 0.49f));
-    first = first < 0 ? 0 : first;
-    last = last > count - 1 ? count - 1 : last;
+  // Voxel i's centre is at i + 1/2 in voxel units: the indices whose centres lie within the box, with a
+  // hundredth of a voxel's slack against rounding (the test is exact).
+  auto centresWithin = [](float lo, float hi, int &first, int &last) {
+    first = int(ceilf(lo - 0.51f));
+    last = int(floorf(hi - 0.49f));
   };
-  int x0, x1, y0, y1, z0, z1;
-  span(box.lower.x, box.upper.x, grid.origin.x, grid.voxelsPerUnit.x, grid.nx, x0, x1);
-  span(box.lower.y, box.upper.y, grid.origin.y, grid.voxelsPerUnit.y, grid.ny, y0, y1);
-  span(box.lower.z, box.upper.z, grid.origin.z, grid.voxelsPerUnit.z, grid.nz, z0, z1);
-  for (int z = z0; z <= z1; ++z)
-    for (int y = y0; y <= y1; ++y)
-      for (int x = x0; x <= x1; ++x)
-        if (cellContains(mesh, c, grid.centre(x, y, z)))
-          offer(grid.index(x, y, z));
+  forEachVoxelIn(grid, cellBounds(mesh, c), centresWithin, [&](int x, int y, int z) {
+    if (cellContains(mesh, c, grid.centre(x, y, z)))
+      offer(grid.index(x, y, z));
+  });
 }
 
-/// Calls `offer(voxel, face)` for each voxel of `grid` that the box of boundary face `face` (4 * tet + i)
-/// reaches, the box widened by a hundredth of a voxel so that rounding never leaves out a voxel it touches.
+/// Calls `offer(voxel)` for each voxel of `grid` that the box of boundary face `face` (4 * tet + i) reaches,
+/// the box widened by a hundredth of a voxel so that rounding never leaves out a voxel it touches.
 template <typename Offer>
 UVR_HOST_DEVICE void forEachBoundaryVoxel(const MeshView &mesh, uint32_t face, const SeedGridView &grid,
                                           Offer &&offer) {
-  const uint32_t *v = mesh.tets + 4 * uint64_t(face >> 2);
-  const uint32_t k = face & 3u;
+  Vec3f a, b, c;
+  tetFaceCorners(mesh, face, a, b, c);
   Box3f box;
-  box.extend(mesh.points[v[(k + 1) & 3u]]);
-  box.extend(mesh.points[v[(k + 2) & 3u]]);
-  box.extend(mesh.points[v[(k + 3) & 3u]]);
-  auto span = [](float lo, float hi, float origin, float scale, int count, int &first, int &last) {
-    first = int(floorf((lo - origin) * scale - 0.01f));
-    last = int(floorf((hi - origin) * scale + 0.01f));
-    first = first < 0 ? 0 : first;
-    last = last > count - 1 ? count - 1 : last;
+  box.extend(a);
+  box.extend(b);
+  box.extend(c);
+  auto voxelsReached = [](float lo, float hi, int &first, int &last) {
+    first = int(floorf(lo - 0.01f));
+    last = int(floorf(hi + 0.01f));
   };
-  int x0, x1, y0, y1, z0, z1;
-  span(box.lower.x, box.upper.x, grid.origin.x, grid.voxelsPerUnit.x, grid.nx, x0, x1);
-  span(box.lower.y, box.upper.y, grid.origin.y, grid.voxelsPerUnit.y, grid.ny, y0, y1);
-  span(box.lower.z, box.upper.z, grid.origin.z, grid.voxelsPerUnit.z, grid.nz, z0, z1);
-  for (int z = z0; z <= z1; ++z)
-    for (int y = y0; y <= y1; ++y)
-      for (int x = x0; x <= x1; ++x)
-        offer(grid.index(x, y, z));
+  forEachVoxelIn(grid, box, voxelsReached, [&](int x, int y, int z) { offer(grid.index(x, y, z)); });
 }
 
 } // namespace uvr
