@@ -40,7 +40,7 @@ TEST(SpatialOrder, KeepsCellsAndFieldsAndImprovesLocality) {
   UnstructuredGrid scrambled = grid;
   scrambled.connectivity.clear();
   scrambled.offsets = {0};
-  std::vector<float> &cellValues = scrambled.fields[1].values;
+  UninitVector<float> &cellValues = scrambled.fields[1].values;
   for (size_t i = 0; i < count; ++i) {
     const size_t c = shuffled[i];
     for (int64_t k = grid.offsets[c]; k < grid.offsets[c + 1]; ++k)

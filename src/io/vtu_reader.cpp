@@ -325,7 +325,7 @@ const char *inflateBlock(const uint8_t *source, uint64_t sourceSize, uint8_t *ta
 /// An UnstructuredGrid whose cell arrays, the largest, are Buffers: decoded straight into them, and viewed in
 /// place by buildMesh.
 struct VtuGrid {
-  std::vector<Vec3f> points;
+  UninitVector<Vec3f> points;
   Buffer<int64_t> offsets; ///< cell count + 1 entries, offsets[0] == 0
   Buffer<int64_t> connectivity;
   Buffer<uint8_t> types;
@@ -667,7 +667,7 @@ private:
     }
   }
 
-  /// The array's `count` values in an Array of them: a std::vector or a Buffer.
+  /// The array's `count` values in an Array of them: an UninitVector or a Buffer.
   template <typename Array> Array readValues(const ArrayInfo &array, uint64_t count) const {
     Payload payload = prepare(array, count);
     Array values(count);
@@ -770,9 +770,9 @@ private:
       uint64_t count = 0;
       if (multiplyOverflows(tuples, array.components, count))
         fail(array, array.position, "value count overflows");
-      ScalarField field{array.name, centering, readValues<std::vector<float>>(array, count)};
+      ScalarField field{array.name, centering, readValues<UninitVector<float>>(array, count)};
       if (array.components > 1) {
-        std::vector<float> magnitude(tuples);
+        UninitVector<float> magnitude(tuples);
         uint64_t components = array.components;
         parallelChunks(tuples, [&](uint64_t begin, uint64_t end) {
           for (uint64_t i = begin; i < end; ++i) {

@@ -6,7 +6,6 @@
 
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
-#include <tbb/task_group.h>
 
 #include <algorithm>
 #include <array>
@@ -69,7 +68,7 @@ float orientedVolume(Vec3f a, Vec3f b, Vec3f c, Vec3f d) { return dot(b - a, cro
 
 /// Positive for cells wound as VTK expects. Hexahedra and pyramids by the Jacobian at the centre; VTK's wedge
 /// base (0,1,2) faces away from the top, hence its sign.
-float windingSign(CellType type, const uint32_t *v, const std::vector<Vec3f> &p) {
+float windingSign(CellType type, const uint32_t *v, std::span<const Vec3f> p) {
   switch (type) {
   case CellType::Tetra:
     return orientedVolume(p[v[0]], p[v[1]], p[v[2]], p[v[3]]);
@@ -169,7 +168,7 @@ constexpr CellKind kSlotKinds[4] = {
 
 } // namespace
 
-bool orientCell(CellType type, uint32_t *v, const std::vector<Vec3f> &points) {
+bool orientCell(CellType type, uint32_t *v, std::span<const Vec3f> points) {
   if (windingSign(type, v, points) >= 0.f)
     return false;
   reverseWinding(type, v);
@@ -197,7 +196,7 @@ Mesh buildMesh(UnstructuredGrid &&grid, const std::string &source) {
                    std::move(grid.fields), source);
 }
 
-Mesh buildMesh(std::vector<Vec3f> &&points, CellArraysView grid, std::vector<ScalarField> &&fields,
+Mesh buildMesh(UninitVector<Vec3f> &&points, CellArraysView grid, std::vector<ScalarField> &&fields,
                const std::string &source) {
   const size_t cellCount = grid.types.size();
   if (grid.offsets.size() != cellCount + 1)
@@ -246,15 +245,6 @@ Mesh buildMesh(std::vector<Vec3f> &&points, CellArraysView grid, std::vector<Sca
   }
   if (points.size() > UINT32_MAX)
     throw Error(source, "", "more than 2^32 points are not supported");
-
-  // std::vector zeroes the mesh's cell arrays on one thread: a task of its own, while the others go on.
-  tbb::task_group zeroing;
-  zeroing.run([&] {
-    mesh.tets.resize(perType[0] * 4);
-    mesh.pyramids.resize(perType[1] * 5);
-    mesh.wedges.resize(perType[2] * 6);
-    mesh.hexes.resize(perType[3] * 8);
-  });
 
   // Pass 2 writes each type's cells (32-bit indices) and the cell field values in type order to Buffers. The
   // mesh's arrays take them once the cells are wound and sorted along orderSpatially's Morton curve.
@@ -350,8 +340,8 @@ Mesh buildMesh(std::vector<Vec3f> &&points, CellArraysView grid, std::vector<Sca
   std::array<Buffer<uint32_t>, 4> orders;
   for (size_t s = 0; s < 4; ++s)
     orders[s] = sortedOrder(typeKeys[s]);
-  zeroing.wait();
-  auto placeCells = [&]<size_t Corners>(size_t s, std::vector<uint32_t> &cells) {
+  auto placeCells = [&]<size_t Corners>(size_t s, UninitVector<uint32_t> &cells) {
+    cells.resize(perType[s] * Corners);
     gather<Corners>(cells.data(), typeCells[s].data(), perType[s], orders[s]);
   };
   placeCells.operator()<4>(0, mesh.tets);

@@ -76,7 +76,7 @@ void radixSortByCode(Buffer<uint64_t> &keys) {
 
 /// Item offset + i becomes the old item offset + order[i].
 template <size_t Stride, typename T>
-void permute(std::vector<T> &values, std::span<const uint32_t> order, size_t offset = 0) {
+void permute(UninitVector<T> &values, std::span<const uint32_t> order, size_t offset = 0) {
   T *items = values.data() + offset * Stride;
   Buffer<T> old(order.size() * Stride);
   parallelChunks(old.size(), 1 << 16, [&](size_t begin, size_t end) {
@@ -103,7 +103,7 @@ void numberPointsByFirstUse(Mesh &mesh) {
   constexpr uint32_t kUnused = 0xffffffffu;
   std::vector<uint32_t> newIndex(mesh.points.size(), kUnused);
   uint32_t next = 0;
-  for (std::vector<uint32_t> *cells : {&mesh.tets, &mesh.pyramids, &mesh.wedges, &mesh.hexes})
+  for (UninitVector<uint32_t> *cells : {&mesh.tets, &mesh.pyramids, &mesh.wedges, &mesh.hexes})
     for (uint32_t &v : *cells) {
       if (newIndex[v] == kUnused)
         newIndex[v] = next++;
@@ -128,7 +128,7 @@ void orderSpatially(Mesh &mesh) {
 
   // Cells: each type array on its own, so that the type order (and thus cell indices' meaning) is kept.
   size_t firstCell = 0;
-  auto orderCells = [&]<size_t Corners>(std::vector<uint32_t> &cells) {
+  auto orderCells = [&]<size_t Corners>(UninitVector<uint32_t> &cells) {
     const size_t count = cells.size() / Corners;
     Buffer<uint64_t> keys(count);
     parallelChunks(count, 1 << 12, [&](size_t begin, size_t end) {

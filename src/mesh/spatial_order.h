@@ -24,7 +24,7 @@ public:
   }
 
   /// The key of the cell with corners v[0, corners) at index `index` of its type array.
-  uint64_t key(const uint32_t *v, int corners, const std::vector<Vec3f> &points, uint64_t index) const {
+  uint64_t key(const uint32_t *v, int corners, std::span<const Vec3f> points, uint64_t index) const {
     Vec3f sum{0.f, 0.f, 0.f};
     for (int i = 0; i < corners; ++i)
       sum = sum + points[v[i]];
