@@ -6,6 +6,7 @@
 
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
+#include <tbb/task_group.h>
 
 #include <algorithm>
 #include <array>
@@ -340,24 +341,32 @@ Mesh buildMesh(UninitVector<Vec3f> &&points, CellArraysView grid, std::vector<Sc
   std::array<Buffer<uint32_t>, 4> orders;
   for (size_t s = 0; s < 4; ++s)
     orders[s] = sortedOrder(typeKeys[s]);
+  // The cells are placed in a serial pass (see FirstUseNumbering), the cell fields meanwhile on the other
+  // threads.
+  tbb::task_group cellFields;
+  cellFields.run([&] {
+    for (size_t f = 0; f < fields.size(); ++f) {
+      if (fields[f].centering == Centering::Cell) {
+        fields[f].values.resize(keptCells);
+        for (size_t s = 0; s < 4; ++s)
+          gather<1>(fields[f].values.data() + firstCell[s], typeOrderValues[f].data() + firstCell[s],
+                    perType[s], orders[s]);
+      }
+    }
+  });
+  FirstUseNumbering numbering(mesh.points.size());
   auto placeCells = [&]<size_t Corners>(size_t s, UninitVector<uint32_t> &cells) {
     cells.resize(perType[s] * Corners);
-    gather<Corners>(cells.data(), typeCells[s].data(), perType[s], orders[s]);
+    numbering.place<Corners>(cells.data(), typeCells[s].data(), perType[s], orders[s]);
   };
   placeCells.operator()<4>(0, mesh.tets);
   placeCells.operator()<5>(1, mesh.pyramids);
   placeCells.operator()<6>(2, mesh.wedges);
   placeCells.operator()<8>(3, mesh.hexes);
-  for (size_t f = 0; f < fields.size(); ++f) {
-    if (fields[f].centering == Centering::Cell) {
-      fields[f].values.resize(keptCells);
-      for (size_t s = 0; s < 4; ++s)
-        gather<1>(fields[f].values.data() + firstCell[s], typeOrderValues[f].data() + firstCell[s],
-                  perType[s], orders[s]);
-    }
-    mesh.fields.push_back(std::move(fields[f]));
-  }
-  numberPointsByFirstUse(mesh);
+  cellFields.wait();
+  for (ScalarField &field : fields)
+    mesh.fields.push_back(std::move(field));
+  numbering.reorderPoints(mesh);
   return mesh;
 }
 

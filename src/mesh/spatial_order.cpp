@@ -74,15 +74,21 @@ void radixSortByCode(Buffer<uint64_t> &keys) {
   std::swap(keys, scratch);
 }
 
-/// Item offset + i becomes the old item offset + order[i].
-template <size_t Stride, typename T>
-void permute(UninitVector<T> &values, std::span<const uint32_t> order, size_t offset = 0) {
-  T *items = values.data() + offset * Stride;
-  Buffer<T> old(order.size() * Stride);
-  parallelChunks(old.size(), 1 << 16, [&](size_t begin, size_t end) {
-    std::copy(items + begin, items + end, old.data() + begin);
+/// A copy of items [0, count), made in parallel.
+template <typename T> Buffer<T> copyOf(const T *items, size_t count) {
+  Buffer<T> copy(count);
+  parallelChunks(count, 1 << 16, [&](size_t begin, size_t end) {
+    std::copy(items + begin, items + end, copy.data() + begin);
   });
-  gather<Stride>(items, old.data(), order.size(), order);
+  return copy;
+}
+
+/// Item offset + i becomes the old item offset + order[i].
+template <typename T>
+void permute(UninitVector<T> &values, std::span<const uint32_t> order, size_t offset = 0) {
+  T *items = values.data() + offset;
+  const Buffer<T> old = copyOf(items, order.size());
+  gather<1>(items, old.data(), order.size(), order);
 }
 
 } // namespace
@@ -99,26 +105,37 @@ Buffer<uint32_t> sortedOrder(Buffer<uint64_t> &keys) {
   return order;
 }
 
-void numberPointsByFirstUse(Mesh &mesh) {
-  constexpr uint32_t kUnused = 0xffffffffu;
-  std::vector<uint32_t> newIndex(mesh.points.size(), kUnused);
-  uint32_t next = 0;
-  for (UninitVector<uint32_t> *cells : {&mesh.tets, &mesh.pyramids, &mesh.wedges, &mesh.hexes})
-    for (uint32_t &v : *cells) {
-      if (newIndex[v] == kUnused)
-        newIndex[v] = next++;
-      v = newIndex[v];
-    }
-  for (uint32_t &index : newIndex)
+void FirstUseNumbering::renumberAfterFirstHalf(uint32_t *corners, size_t count,
+                                               const std::vector<uint32_t> &ownIndex, uint32_t ownPoints) {
+  // The second half's points in the order it first used them, then the number each gets overall: its own
+  // number where the first half did not use it.
+  Buffer<uint32_t> overall(ownPoints);
+  for (size_t point = 0; point < ownIndex.size(); ++point)
+    if (ownIndex[point] != kUnused)
+      overall[ownIndex[point]] = uint32_t(point);
+  for (uint32_t &number : overall) {
+    uint32_t &index = newIndex_[number];
     if (index == kUnused)
-      index = next++;
-  std::vector<uint32_t> order(mesh.points.size());
+      index = next_++;
+    number = index;
+  }
+  parallelChunks(count, 1 << 16, [&](size_t begin, size_t end) {
+    for (size_t i = begin; i < end; ++i)
+      corners[i] = overall[corners[i]];
+  });
+}
+
+void FirstUseNumbering::reorderPoints(Mesh &mesh) {
+  for (uint32_t &index : newIndex_)
+    if (index == kUnused)
+      index = next_++;
+  Buffer<uint32_t> order(newIndex_.size());
   for (size_t i = 0; i < order.size(); ++i)
-    order[newIndex[i]] = uint32_t(i);
-  permute<1>(mesh.points, order);
+    order[newIndex_[i]] = uint32_t(i);
+  permute(mesh.points, order);
   for (ScalarField &field : mesh.fields)
     if (field.centering == Centering::Point)
-      permute<1>(field.values, order);
+      permute(field.values, order);
 }
 
 void orderSpatially(Mesh &mesh) {
@@ -127,6 +144,7 @@ void orderSpatially(Mesh &mesh) {
   const CellKeys cellKeys(mesh.bounds());
 
   // Cells: each type array on its own, so that the type order (and thus cell indices' meaning) is kept.
+  FirstUseNumbering numbering(mesh.points.size());
   size_t firstCell = 0;
   auto orderCells = [&]<size_t Corners>(UninitVector<uint32_t> &cells) {
     const size_t count = cells.size() / Corners;
@@ -136,11 +154,13 @@ void orderSpatially(Mesh &mesh) {
         keys[c] = cellKeys.key(&cells[c * Corners], int(Corners), mesh.points, c);
     });
     const Buffer<uint32_t> order = sortedOrder(keys);
-    if (!order.empty()) {
-      permute<Corners>(cells, order);
+    if (order.empty()) {
+      numbering.place<Corners>(cells.data(), cells.data(), count, order);
+    } else {
+      numbering.place<Corners>(cells.data(), copyOf(cells.data(), cells.size()).data(), count, order);
       for (ScalarField &field : mesh.fields)
         if (field.centering == Centering::Cell)
-          permute<1>(field.values, order, firstCell);
+          permute(field.values, order, firstCell);
     }
     firstCell += count;
   };
@@ -148,7 +168,7 @@ void orderSpatially(Mesh &mesh) {
   orderCells.operator()<5>(mesh.pyramids);
   orderCells.operator()<6>(mesh.wedges);
   orderCells.operator()<8>(mesh.hexes);
-  numberPointsByFirstUse(mesh);
+  numbering.reorderPoints(mesh);
 }
 
 } // namespace uvr
