@@ -132,14 +132,14 @@ int slotOf(CellType type) {
 
 /// The cell's point count, when its offsets do not decrease. Unsigned, as a chunk checked in parallel may
 /// start past an earlier chunk's bad offsets.
-bool pointCount(const CellArraysView &grid, size_t c, uint64_t &count) {
+template <typename Index> bool pointCount(const CellArrays<Index> &grid, size_t c, uint64_t &count) {
   count = uint64_t(grid.offsets[c + 1]) - uint64_t(grid.offsets[c]);
   return grid.offsets[c + 1] >= grid.offsets[c];
 }
 
 /// Whether buildMesh can take cell c: offsets that do not decrease, and a volume cell with points for all of
 /// its corners or a lower-dimensional one (skipped).
-bool wellFormed(const CellArraysView &grid, size_t c) {
+template <typename Index> bool wellFormed(const CellArrays<Index> &grid, size_t c) {
   uint64_t count;
   if (!pointCount(grid, c, count))
     return false;
@@ -150,7 +150,8 @@ bool wellFormed(const CellArraysView &grid, size_t c) {
 }
 
 /// Says why cell c is not wellFormed.
-[[noreturn]] void throwMalformed(const CellArraysView &grid, size_t c, const std::string &source) {
+template <typename Index>
+[[noreturn]] void throwMalformed(const CellArrays<Index> &grid, size_t c, const std::string &source) {
   const std::string cell = "cell " + std::to_string(c);
   const uint8_t vtkType = grid.types[c];
   uint64_t count;
@@ -162,6 +163,11 @@ bool wellFormed(const CellArraysView &grid, size_t c) {
                 "cell of VTK type " + std::to_string(vtkType) + " needs " + std::to_string(kind.corners) +
                     " points, has " + std::to_string(count));
   throw Error(source, cell, "unsupported VTK cell type " + std::to_string(vtkType));
+}
+
+/// Whether a point index lies outside [0, pointCount); a negative one wraps to 2^63 or more.
+template <typename Index> bool outside(Index id, uint64_t pointCount) {
+  return uint64_t(int64_t(id)) >= pointCount;
 }
 
 constexpr CellKind kSlotKinds[4] = {
@@ -197,7 +203,8 @@ Mesh buildMesh(UnstructuredGrid &&grid, const std::string &source) {
                    std::move(grid.fields), source);
 }
 
-Mesh buildMesh(UninitVector<Vec3f> &&points, CellArraysView grid, std::vector<ScalarField> &&fields,
+template <typename Index>
+Mesh buildMesh(UninitVector<Vec3f> &&points, CellArrays<Index> grid, std::vector<ScalarField> &&fields,
                const std::string &source) {
   const size_t cellCount = grid.types.size();
   if (grid.offsets.size() != cellCount + 1)
@@ -274,9 +281,9 @@ Mesh buildMesh(UninitVector<Vec3f> &&points, CellArraysView grid, std::vector<Sc
         continue;
       const int s = slotOf(kind.type);
       uint32_t *v = typeCells[s].data() + next[s] * uint64_t(kind.corners);
-      const int64_t *ids = &grid.connectivity[size_t(grid.offsets[c])];
+      const Index *ids = &grid.connectivity[size_t(grid.offsets[c])];
       for (int i = 0; i < kind.corners; ++i) {
-        if (ids[i] < 0 || uint64_t(ids[i]) >= mesh.points.size()) {
+        if (outside(ids[i], mesh.points.size())) {
           chunk.firstBadIndex = c;
           return;
         }
@@ -314,18 +321,18 @@ Mesh buildMesh(UninitVector<Vec3f> &&points, CellArraysView grid, std::vector<Sc
   for (const Chunk &chunk : chunks) {
     if (chunk.firstBadIndex != SIZE_MAX) {
       const size_t c = chunk.firstBadIndex;
-      const int64_t *ids = &grid.connectivity[size_t(grid.offsets[c])];
-      const int64_t bad = *std::find_if(ids, ids + vertexCount(grid.types[c]), [&](int64_t id) {
-        return id < 0 || uint64_t(id) >= mesh.points.size();
-      });
+      const Index *ids = &grid.connectivity[size_t(grid.offsets[c])];
+      const Index bad = *std::find_if(ids, ids + vertexCount(grid.types[c]),
+                                      [&](Index id) { return outside(id, mesh.points.size()); });
       throw Error(source, "cell " + std::to_string(c),
                   "point index " + std::to_string(bad) + " outside [0, " +
                       std::to_string(mesh.points.size()) + ")");
     }
   }
-  mesh.invertedCells =
-      windAndKey.operator()<CellType::Tetra, 4>(0) + windAndKey.operator()<CellType::Pyramid, 5>(1) +
-      windAndKey.operator()<CellType::Wedge, 6>(2) + windAndKey.operator()<CellType::Hexahedron, 8>(3);
+  mesh.invertedCells = windAndKey.template operator()<CellType::Tetra, 4>(0) +
+                       windAndKey.template operator()<CellType::Pyramid, 5>(1) +
+                       windAndKey.template operator()<CellType::Wedge, 6>(2) +
+                       windAndKey.template operator()<CellType::Hexahedron, 8>(3);
   for (size_t f = 0; f < fields.size(); ++f) {
     const ScalarField &field = fields[f];
     if (field.centering == Centering::Cell && field.values.size() != cellCount)
@@ -359,15 +366,20 @@ Mesh buildMesh(UninitVector<Vec3f> &&points, CellArraysView grid, std::vector<Sc
     cells.resize(perType[s] * Corners);
     numbering.place<Corners>(cells.data(), typeCells[s].data(), perType[s], orders[s]);
   };
-  placeCells.operator()<4>(0, mesh.tets);
-  placeCells.operator()<5>(1, mesh.pyramids);
-  placeCells.operator()<6>(2, mesh.wedges);
-  placeCells.operator()<8>(3, mesh.hexes);
+  placeCells.template operator()<4>(0, mesh.tets);
+  placeCells.template operator()<5>(1, mesh.pyramids);
+  placeCells.template operator()<6>(2, mesh.wedges);
+  placeCells.template operator()<8>(3, mesh.hexes);
   cellFields.wait();
   for (ScalarField &field : fields)
     mesh.fields.push_back(std::move(field));
   numbering.reorderPoints(mesh);
   return mesh;
 }
+
+template Mesh buildMesh(UninitVector<Vec3f> &&, CellArrays<int64_t>, std::vector<ScalarField> &&,
+                        const std::string &);
+template Mesh buildMesh(UninitVector<Vec3f> &&, CellArrays<uint32_t>, std::vector<ScalarField> &&,
+                        const std::string &);
 
 } // namespace uvr

@@ -70,15 +70,19 @@ bool orientCell(CellType type, uint32_t *v, std::span<const Vec3f> points);
 Mesh buildMesh(UnstructuredGrid &&grid, const std::string &source);
 
 /// The cell arrays of an unstructured grid as VTK stores them, viewed in place (e.g. numpy arrays handed over
-/// from Python), so that building a mesh from them copies nothing twice.
-struct CellArraysView {
+/// from Python), so that building a mesh from them copies nothing twice. Point indices are VTK's 64 bits, or
+/// 32 where a reader narrowed them as it checked them (half the memory to write and read again).
+template <typename Index> struct CellArrays {
   std::span<const int64_t> offsets; ///< cell count + 1 entries, offsets[0] == 0
-  std::span<const int64_t> connectivity;
+  std::span<const Index> connectivity;
   std::span<const uint8_t> types;
 };
+using CellArraysView = CellArrays<int64_t>;
 
-/// buildMesh over cells viewed in place; the offsets are checked against the connectivity.
-Mesh buildMesh(UninitVector<Vec3f> &&points, CellArraysView cells, std::vector<ScalarField> &&fields,
+/// buildMesh over cells viewed in place; the offsets are checked against the connectivity. For int64_t and
+/// uint32_t point indices.
+template <typename Index>
+Mesh buildMesh(UninitVector<Vec3f> &&points, CellArrays<Index> cells, std::vector<ScalarField> &&fields,
                const std::string &source);
 
 /// Sorts each cell type's cells along a Morton curve through their centroids and numbers the points by first
