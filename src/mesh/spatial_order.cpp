@@ -21,8 +21,9 @@ constexpr size_t kBuckets = size_t(1) << kDigitBits;
 
 size_t digit(uint64_t key, int shift) { return size_t(key >> shift) & (kBuckets - 1); }
 
-/// Writes [begin, end) to out ordered by one digit, ties in their order.
-void countingSort(const uint64_t *begin, const uint64_t *end, uint64_t *out, int shift) {
+/// Writes [begin, end) to out ordered by one digit, ties in their order: the keys, or as Out = uint32_t their
+/// indices.
+template <typename Out> void countingSort(const uint64_t *begin, const uint64_t *end, Out *out, int shift) {
   std::array<size_t, kBuckets> next{};
   for (const uint64_t *key = begin; key != end; ++key)
     ++next[digit(*key, shift)];
@@ -30,14 +31,15 @@ void countingSort(const uint64_t *begin, const uint64_t *end, uint64_t *out, int
   for (size_t &n : next)
     position += std::exchange(n, position);
   for (const uint64_t *key = begin; key != end; ++key)
-    out[next[digit(*key, shift)]++] = *key;
+    out[next[digit(*key, shift)]++] = Out(*key);
 }
 
-/// Sorts keys (code << 32 | index) by their code, ties in index order. A stable radix sort on the code's 30
-/// bits, three digits of 10: first by the top digit, in parallel over chunks of keys (each chunk counts its
-/// digits, then writes its keys after those of earlier chunks with the same digit); then each of the 1024
-/// runs of equal top digits by the lower two, in parallel over runs, each small enough to stay in cache.
-void radixSortByCode(Buffer<uint64_t> &keys) {
+/// The indices of keys (code << 32 | index) sorted by their code, ties in index order. A stable radix sort on
+/// the code's 30 bits, three digits of 10: first by the top digit, in parallel over chunks of keys (each
+/// chunk counts its digits, then writes its keys after those of earlier chunks with the same digit); then
+/// each of the 1024 runs of equal top digits by the lower two, in parallel over runs, each small enough to
+/// stay in cache. The last pass writes the indices alone. The keys are left in no useful order.
+Buffer<uint32_t> radixSortedIndices(Buffer<uint64_t> &keys) {
   constexpr int kLowShift = 32, kTopShift = 32 + 2 * kDigitBits;
   constexpr size_t kChunkKeys = size_t(1) << 16;
   const size_t chunkCount = (keys.size() + kChunkKeys - 1) / kChunkKeys;
@@ -66,12 +68,13 @@ void radixSortByCode(Buffer<uint64_t> &keys) {
     for (const uint64_t *key = begin; key != end; ++key)
       scratch[position[digit(*key, kTopShift)]++] = *key;
   });
+  Buffer<uint32_t> indices(keys.size());
   tbb::parallel_for(size_t(0), kBuckets, [&](size_t b) {
     const size_t first = runStart[b], last = runStart[b + 1];
     countingSort(scratch.data() + first, scratch.data() + last, keys.data() + first, kLowShift);
-    countingSort(keys.data() + first, keys.data() + last, scratch.data() + first, kLowShift + kDigitBits);
+    countingSort(keys.data() + first, keys.data() + last, indices.data() + first, kLowShift + kDigitBits);
   });
-  std::swap(keys, scratch);
+  return indices;
 }
 
 /// A copy of items [0, count), made in parallel.
@@ -96,13 +99,7 @@ void permute(UninitVector<T> &values, std::span<const uint32_t> order, size_t of
 Buffer<uint32_t> sortedOrder(Buffer<uint64_t> &keys) {
   if (std::is_sorted(keys.begin(), keys.end()))
     return {};
-  radixSortByCode(keys);
-  Buffer<uint32_t> order(keys.size());
-  parallelChunks(keys.size(), 1 << 12, [&](size_t begin, size_t end) {
-    for (size_t i = begin; i < end; ++i)
-      order[i] = uint32_t(keys[i]);
-  });
-  return order;
+  return radixSortedIndices(keys);
 }
 
 void FirstUseNumbering::renumberAfterFirstHalf(uint32_t *corners, size_t count,

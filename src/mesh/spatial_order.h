@@ -57,8 +57,8 @@ private:
   Vec3f lower_, scale_;
 };
 
-/// Sorts the keys of one type array's cells; returns the new order (order[newIndex] = oldIndex), or an empty
-/// buffer when the cells are in that order already.
+/// The order of one type array's cells by their keys (order[newIndex] = oldIndex), or an empty buffer when
+/// the cells are in that order already. Leaves the keys in no useful order.
 Buffer<uint32_t> sortedOrder(Buffer<uint64_t> &keys);
 
 /// Item i of `items` becomes item order[i] of `source` (item i where `order` is empty: in order already), for
