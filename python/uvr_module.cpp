@@ -66,7 +66,7 @@ ScalarField toField(const std::string &name, Centering centering, const py::hand
     throw Error("uvr.Mesh", "", "field '" + name + "' must have 1 or 2 dimensions");
   const size_t tuples = size_t(array.shape(0));
   const size_t components = array.ndim() == 2 ? size_t(array.shape(1)) : 1;
-  ScalarField field{name, centering, std::vector<float>(tuples)};
+  ScalarField field{name, centering, UninitVector<float>(tuples)};
   const double *data = array.data();
   for (size_t i = 0; i < tuples; ++i) {
     if (components == 1) {
@@ -89,10 +89,10 @@ void addFields(std::vector<ScalarField> &fields, Centering centering, const py::
     fields.push_back(toField(py::str(key), centering, data[key]));
 }
 
-std::vector<Vec3f> toPoints(const py::array &object) {
+UninitVector<Vec3f> toPoints(const py::array &object) {
   if (object.ndim() != 2 || object.shape(1) != 3)
     throw Error("uvr.Mesh", "", "points must have shape (n, 3)");
-  std::vector<Vec3f> points(size_t(object.shape(0)));
+  UninitVector<Vec3f> points(size_t(object.shape(0)));
   if (py::isinstance<py::array_t<float>>(object) && (object.flags() & py::array::c_style)) {
     std::memcpy(points.data(), object.data(), points.size() * sizeof(Vec3f));
     return points;
@@ -111,7 +111,7 @@ std::shared_ptr<PyMesh> makeMesh(const py::array &pointsArray, const py::array &
                                  const py::array &typesArray, const py::object &offsetsObject,
                                  const py::object &pointData, const py::object &cellData) {
   const std::string source = "uvr.Mesh";
-  std::vector<Vec3f> points = toPoints(pointsArray);
+  UninitVector<Vec3f> points = toPoints(pointsArray);
   const InArray<int64_t> cells = cellsArray;
   const InArray<uint8_t> types = typesArray;
   if (cells.ndim() != 1 || types.ndim() != 1)
@@ -192,7 +192,7 @@ std::pair<std::vector<int64_t>, std::vector<uint8_t>> flatCells(const Mesh &mesh
   cells.reserve(mesh.tets.size() + mesh.pyramids.size() + mesh.wedges.size() + mesh.hexes.size() +
                 mesh.cellCount());
   types.reserve(mesh.cellCount());
-  auto add = [&](const std::vector<uint32_t> &ids, int corners, CellType type) {
+  auto add = [&](const UninitVector<uint32_t> &ids, int corners, CellType type) {
     for (size_t i = 0; i < ids.size(); i += size_t(corners)) {
       cells.push_back(corners);
       cells.insert(cells.end(), ids.begin() + ptrdiff_t(i), ids.begin() + ptrdiff_t(i) + corners);

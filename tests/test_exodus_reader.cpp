@@ -85,8 +85,8 @@ TEST_F(ExodusReader, BlocksOfEveryVolumeType) {
 
     // Mesh order is tets, pyramids, wedges, hexes; density is the block's base value + step.
     const float s = float(step);
-    EXPECT_EQ(field(mesh, "density").values, (std::vector<float>{5 + s, 4 + s, 2 + s, 3 + s, 1 + s}));
-    const std::vector<float> &stress = field(mesh, "stress").values; // only the hex block has it
+    EXPECT_EQ(field(mesh, "density").values, (UninitVector<float>{5 + s, 4 + s, 2 + s, 3 + s, 1 + s}));
+    const UninitVector<float> &stress = field(mesh, "stress").values; // only the hex block has it
     ASSERT_EQ(stress.size(), 5u);
     for (int c = 0; c < 4; ++c)
       EXPECT_TRUE(std::isnan(stress[size_t(c)]));
@@ -119,9 +119,9 @@ TEST_F(ExodusReader, NetCdf4OlderLayout) {
   Mesh mesh = loadMesh(path, {1});
   EXPECT_EQ(mesh.tetCount(), 2u);
   EXPECT_EQ(mesh.points[4].x, 1.f);
-  EXPECT_EQ(field(mesh, "u").values, (std::vector<float>{10, 11, 12, 13, 14}));
-  EXPECT_EQ(field(mesh, "v").values, (std::vector<float>{-10, -11, -12, -13, -14}));
-  EXPECT_EQ(field(mesh, "id").values, (std::vector<float>{2, 3}));
+  EXPECT_EQ(field(mesh, "u").values, (UninitVector<float>{10, 11, 12, 13, 14}));
+  EXPECT_EQ(field(mesh, "v").values, (UninitVector<float>{-10, -11, -12, -13, -14}));
+  EXPECT_EQ(field(mesh, "id").values, (UninitVector<float>{2, 3}));
   EXPECT_EQ(field(mesh, "u").centering, Centering::Point);
   EXPECT_EQ(field(mesh, "id").centering, Centering::Cell);
 }

@@ -64,7 +64,7 @@ Mesh mixedMesh() {
   return buildMesh(std::move(all), "mixed");
 }
 
-bool samePoints(const std::vector<Vec3f> &a, const std::vector<Vec3f> &b) {
+bool samePoints(std::span<const Vec3f> a, std::span<const Vec3f> b) {
   return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(Vec3f)) == 0;
 }
 
@@ -246,7 +246,7 @@ TEST_F(Formats, SaveMeshByExtension) {
 // other numbering is reordered as buildMesh orders every mesh.
 TEST_F(Formats, UmeshOrderIsKeptWhenPointsAreNumberedByFirstUse) {
   Mesh mesh = withoutCellFields(mixedMesh());
-  std::vector<uint32_t> reversed; // the hexes in reverse order: no longer along the Morton curve
+  UninitVector<uint32_t> reversed; // the hexes in reverse order: no longer along the Morton curve
   for (size_t h = mesh.hexes.size(); h > 0; h -= 8)
     reversed.insert(reversed.end(), mesh.hexes.begin() + std::ptrdiff_t(h - 8),
                     mesh.hexes.begin() + std::ptrdiff_t(h));
@@ -254,7 +254,7 @@ TEST_F(Formats, UmeshOrderIsKeptWhenPointsAreNumberedByFirstUse) {
   Mesh renumbered = mesh;
   std::vector<uint32_t> newIndex(mesh.points.size(), UINT32_MAX);
   uint32_t next = 0;
-  for (std::vector<uint32_t> *cells :
+  for (UninitVector<uint32_t> *cells :
        {&renumbered.tets, &renumbered.pyramids, &renumbered.wedges, &renumbered.hexes})
     for (uint32_t &v : *cells) {
       if (newIndex[v] == UINT32_MAX)
@@ -477,12 +477,12 @@ TEST(Gmsh, FieldsAndTimeStepsInEveryEncoding) {
       EXPECT_EQ(grid.connectivity, (std::vector<int64_t>{0, 1, 2, 3, 1, 2, 3, 4}));
       ASSERT_EQ(grid.fields.size(), 2u);
       EXPECT_EQ(grid.fields[0].name, "temperature");
-      EXPECT_EQ(grid.fields[0].values, (std::vector<float>{10, 20, 30, 40, 50}));
+      EXPECT_EQ(grid.fields[0].values, (UninitVector<float>{10, 20, 30, 40, 50}));
       EXPECT_EQ(grid.fields[1].name, "velocity");
       EXPECT_EQ(grid.fields[1].centering, Centering::Cell);
-      EXPECT_EQ(grid.fields[1].values, (std::vector<float>{0, 5, 2}));
+      EXPECT_EQ(grid.fields[1].values, (UninitVector<float>{0, 5, 2}));
       const UnstructuredGrid second = readGmsh(path, {1});
-      EXPECT_EQ(second.fields[0].values, (std::vector<float>{20, 40, 60, 80, 100}));
+      EXPECT_EQ(second.fields[0].values, (UninitVector<float>{20, 40, 60, 80, 100}));
       EXPECT_EQ(second.fields[1].values, grid.fields[1].values); // one step only: the same at every step
       EXPECT_NE(errorOf([&] { readGmsh(path, {2}); }).find("time step 2 asked, the file has 2"),
                 std::string::npos);
@@ -549,7 +549,7 @@ Mesh tetWithValue(float value) {
   grid.offsets = {0, 4};
   grid.connectivity = {0, 1, 2, 3};
   grid.types = {10};
-  grid.fields = {{"f", Centering::Point, std::vector<float>(4, value)}};
+  grid.fields = {{"f", Centering::Point, UninitVector<float>(4, value)}};
   return buildMesh(std::move(grid), "tet");
 }
 
@@ -572,15 +572,15 @@ TEST_F(Formats, PvdCollectionTimeSteps) {
          "<DataSet timestep=\"1\" part=\"0\" file=\"step1.vtu\"/>\n"
          "</Collection>\n</VTKFile>\n";
   EXPECT_EQ(timeStepCount(path("series.pvd")), 4);
-  EXPECT_EQ(loadMesh(path("series.pvd")).fields[0].values, std::vector<float>(4, 0.f));
+  EXPECT_EQ(loadMesh(path("series.pvd")).fields[0].values, UninitVector<float>(4, 0.f));
   const Mesh merged = loadMesh(path("series.pvd"), {1});
   EXPECT_EQ(merged.tetCount(), 2u);
   EXPECT_EQ(merged.points.size(), 8u);
-  std::vector<float> values = merged.fields[0].values;
+  UninitVector<float> values = merged.fields[0].values;
   std::sort(values.begin(), values.end());
-  EXPECT_EQ(values, (std::vector<float>{7, 7, 7, 7, 8, 8, 8, 8}));
-  EXPECT_EQ(loadMesh(path("series.pvd"), {2}).fields[0].values, std::vector<float>(4, 1.f));
-  EXPECT_EQ(loadMesh(path("series.pvd"), {3}).fields[0].values, std::vector<float>(4, 2.f));
+  EXPECT_EQ(values, (UninitVector<float>{7, 7, 7, 7, 8, 8, 8, 8}));
+  EXPECT_EQ(loadMesh(path("series.pvd"), {2}).fields[0].values, UninitVector<float>(4, 1.f));
+  EXPECT_EQ(loadMesh(path("series.pvd"), {3}).fields[0].values, UninitVector<float>(4, 2.f));
   const std::string error = errorOf([&] { loadMesh(path("series.pvd"), {4}); });
   EXPECT_NE(error.find("time step 4 asked, the series has 4 (0 to 3)"), std::string::npos) << error;
 }
@@ -593,13 +593,13 @@ TEST_F(Formats, NumberedFileTimeSteps) {
   for (const std::string pattern : {"data_%d.vtu", "data_*.vtu"}) {
     SCOPED_TRACE(pattern);
     EXPECT_EQ(timeStepCount(path(pattern)), 3);
-    EXPECT_EQ(loadMesh(path(pattern), {1}).fields[0].values, std::vector<float>(4, 2.f));
-    EXPECT_EQ(loadMesh(path(pattern), {2}).fields[0].values, std::vector<float>(4, 10.f));
+    EXPECT_EQ(loadMesh(path(pattern), {1}).fields[0].values, UninitVector<float>(4, 2.f));
+    EXPECT_EQ(loadMesh(path(pattern), {2}).fields[0].values, UninitVector<float>(4, 10.f));
   }
   for (int i : {1, 3})
     saveMesh(path("padded_" + std::string(i < 10 ? "000" : "00") + std::to_string(i) + ".umesh"),
              tetWithValue(float(i)));
-  EXPECT_EQ(loadMesh(path("padded_%04d.umesh"), {1}).fields[0].values, std::vector<float>(4, 3.f));
+  EXPECT_EQ(loadMesh(path("padded_%04d.umesh"), {1}).fields[0].values, UninitVector<float>(4, 3.f));
   EXPECT_EQ(timeStepCount(path("data_0.vtu")), 1);
   EXPECT_NE(errorOf([&] { loadMesh(path("none_%d.vtu")); }).find("no file matches this pattern"),
             std::string::npos);

@@ -342,7 +342,7 @@ TEST(GenTet, LinearVolumeSampledExactly) {
   options.cellField = true;
   const Mesh mesh = generateTetMesh(volume, options);
   ASSERT_GT(mesh.tetCount(), 1000u);
-  const std::vector<float> &values = mesh.fields[0].values;
+  const UninitVector<float> &values = mesh.fields[0].values;
   for (size_t p = 0; p < mesh.points.size(); ++p) {
     const Vec3f w = mesh.points[p];
     const double i = (w.x - 10.0) / 0.5, j = (w.y + 3.0) / 1.0, k = (w.z - 1.0) / 0.8;

@@ -19,10 +19,10 @@ TEST(Occupancy, KeepsEveryPointInACellAndRejectsEmptySpace) {
         type, 10, {{-1.f, -1.f, -1.f}, {1.f, 1.f, 1.f}}, [](Vec3f p) { return p.x; }, 0.3f);
     const Mesh box = buildMesh(std::move(lattice), "lattice");
     Mesh ball = box;
-    std::vector<uint32_t> *arrays[] = {&ball.tets, &ball.pyramids, &ball.wedges, &ball.hexes};
+    UninitVector<uint32_t> *arrays[] = {&ball.tets, &ball.pyramids, &ball.wedges, &ball.hexes};
     const int corners[] = {4, 5, 6, 8};
     for (int a = 0; a < 4; ++a) {
-      std::vector<uint32_t> kept;
+      UninitVector<uint32_t> kept;
       for (size_t c = 0; c < arrays[a]->size(); c += size_t(corners[a])) {
         Vec3f centroid{0.f, 0.f, 0.f};
         for (int i = 0; i < corners[a]; ++i)

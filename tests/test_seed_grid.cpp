@@ -24,7 +24,7 @@ TEST(SeedGrid, SeedsEachVoxelWithTheLowestCellHoldingItsCentre) {
                   "box");
     for (auto [cells, corners] :
          {std::pair{&mesh.tets, 4}, {&mesh.pyramids, 5}, {&mesh.wedges, 6}, {&mesh.hexes, 8}}) {
-      std::vector<uint32_t> kept;
+      UninitVector<uint32_t> kept;
       for (size_t c = 0; c < cells->size(); c += size_t(corners)) {
         float sum = 0.f;
         for (int i = 0; i < corners; ++i)
@@ -68,7 +68,7 @@ TEST(SeedGrid, BoundaryFacesTellPointsOutsideTheMesh) {
       makeBoxGrid(
           CellType::Tetra, 12, {{-1.f, -1.f, -1.f}, {1.f, 1.f, 1.f}}, [](Vec3f p) { return p.x; }, 0.3f),
       "box");
-  std::vector<uint32_t> kept;
+  UninitVector<uint32_t> kept;
   for (size_t c = 0; c < mesh.tets.size(); c += 4) {
     Vec3f centroid{0.f, 0.f, 0.f};
     for (int i = 0; i < 4; ++i)

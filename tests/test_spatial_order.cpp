@@ -28,26 +28,27 @@ std::multiset<std::vector<float>> cellCorners(const Mesh &mesh) {
   return cells;
 }
 
+// The cells shuffled as files often list them, each cell's field value (field 1) kept with it.
+UnstructuredGrid scrambledCells(const UnstructuredGrid &grid) {
+  const size_t count = grid.types.size();
+  UnstructuredGrid scrambled = grid;
+  scrambled.connectivity.clear();
+  scrambled.offsets = {0};
+  for (size_t i = 0; i < count; ++i) {
+    const size_t c = (i * 7919) % count;
+    for (int64_t k = grid.offsets[c]; k < grid.offsets[c + 1]; ++k)
+      scrambled.connectivity.push_back(grid.connectivity[size_t(k)]);
+    scrambled.offsets.push_back(int64_t(scrambled.connectivity.size()));
+    scrambled.fields[1].values[i] = grid.fields[1].values[c];
+  }
+  return scrambled;
+}
+
 } // namespace
 
 TEST(SpatialOrder, KeepsCellsAndFieldsAndImprovesLocality) {
   UnstructuredGrid grid = makeBoxGrid(CellType::Tetra, 12, {{0.f, 0.f, 0.f}, {1.f, 1.f, 1.f}}, field, 0.2f);
-  // Shuffle the cells as files often list them, keeping each cell's field value with it.
-  const size_t count = grid.types.size();
-  std::vector<size_t> shuffled(count);
-  for (size_t i = 0; i < count; ++i)
-    shuffled[i] = (i * 7919) % count;
-  UnstructuredGrid scrambled = grid;
-  scrambled.connectivity.clear();
-  scrambled.offsets = {0};
-  std::vector<float> &cellValues = scrambled.fields[1].values;
-  for (size_t i = 0; i < count; ++i) {
-    const size_t c = shuffled[i];
-    for (int64_t k = grid.offsets[c]; k < grid.offsets[c + 1]; ++k)
-      scrambled.connectivity.push_back(grid.connectivity[size_t(k)]);
-    scrambled.offsets.push_back(int64_t(scrambled.connectivity.size()));
-    cellValues[i] = grid.fields[1].values[c];
-  }
+  const UnstructuredGrid scrambled = scrambledCells(grid);
 
   Mesh unordered = buildMesh(UnstructuredGrid(scrambled), "scrambled");
   Mesh again = unordered;
@@ -82,4 +83,24 @@ TEST(SpatialOrder, KeepsCellsAndFieldsAndImprovesLocality) {
   orderSpatially(again);
   EXPECT_EQ(again.tets, unordered.tets);
   EXPECT_EQ(again.fields[size_t(cellField)].values, unordered.fields[size_t(cellField)].values);
+}
+
+// Enough cells that the numbering splits them (see FirstUseNumbering::place): each corner is a point seen
+// before or the next unseen one, and point values still belong to their points.
+TEST(SpatialOrder, NumbersPointsByFirstUseInLargeMeshes) {
+  const UnstructuredGrid grid =
+      makeBoxGrid(CellType::Tetra, 26, {{0.f, 0.f, 0.f}, {1.f, 1.f, 1.f}}, field, 0.2f);
+  ASSERT_GT(grid.types.size(), size_t(1) << 16);
+  const Mesh mesh = buildMesh(scrambledCells(grid), "scrambled");
+  int64_t largest = -1;
+  bool firstUseOrder = true;
+  for (const uint32_t v : mesh.tets) {
+    firstUseOrder &= int64_t(v) <= largest + 1;
+    largest = std::max(largest, int64_t(v));
+  }
+  EXPECT_TRUE(firstUseOrder);
+  EXPECT_EQ(largest + 1, int64_t(mesh.points.size()));
+  const int pointField = mesh.findField("f");
+  for (size_t v = 0; v < mesh.points.size(); ++v)
+    ASSERT_NEAR(mesh.fields[size_t(pointField)].values[v], field(mesh.points[v]), 1e-4f);
 }

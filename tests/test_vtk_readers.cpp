@@ -308,7 +308,7 @@ TEST(VtkReaders, Base64HeaderEncodedApart) {
   EXPECT_EQ(grid.connectivity, (std::vector<int64_t>{0, 1, 2, 3}));
   EXPECT_EQ(grid.types, std::vector<uint8_t>{10});
   ASSERT_EQ(grid.fields.size(), 1u);
-  EXPECT_EQ(grid.fields[0].values, (std::vector<float>{1, 2, 3, 4}));
+  EXPECT_EQ(grid.fields[0].values, (UninitVector<float>{1, 2, 3, 4}));
 }
 
 TEST(SharedVtkData, SmallFiles) {
@@ -334,7 +334,7 @@ TEST(SharedVtkData, SmallFiles) {
   EXPECT_EQ(field.types, std::vector<uint8_t>(3, 12));
   const ScalarField *material = findField(field, "material", Centering::Cell);
   ASSERT_NE(material, nullptr);
-  EXPECT_EQ(material->values, (std::vector<float>{100.f, 200.f, 300.f}));
+  EXPECT_EQ(material->values, (UninitVector<float>{100.f, 200.f, 300.f}));
   EXPECT_NE(findField(field, "group", Centering::Cell), nullptr);
   EXPECT_NE(findField(field, "group_and_material", Centering::Cell), nullptr);
 

@@ -14,7 +14,7 @@ ScalarField sampleCellCentroids(const Volume &volume, const Mesh &mesh) {
       const int r1 = (c + 1) % 3, r2 = (c + 2) % 3, c1 = (r + 1) % 3, c2 = (r + 2) % 3;
       inverse[r][c] = (m[r1][c1] * m[r2][c2] - m[r1][c2] * m[r2][c1]) / det;
     }
-  ScalarField field{volume.name + "_cell", Centering::Cell, std::vector<float>(mesh.cellCount())};
+  ScalarField field{volume.name + "_cell", Centering::Cell, UninitVector<float>(mesh.cellCount(), 0.f)};
   auto sampleAt = [&](const uint32_t *corners, int count) {
     double centroid[3] = {0, 0, 0};
     for (int k = 0; k < count; ++k) {

@@ -254,7 +254,7 @@ Mesh HexMesher::emit() {
   Mesh mesh;
   mesh.points.resize(pointCount);
   mesh.hexes.resize(8 * hexCount);
-  ScalarField field{volume_.name, Centering::Point, std::vector<float>(pointCount)};
+  ScalarField field{volume_.name, Centering::Point, UninitVector<float>(pointCount)};
   const bool mirrored = volume_.worldDeterminant() < 0;
   tbb::parallel_for(int64_t(0), vy * vz, [&](int64_t row) {
     const int64_t j = row % vy, k = row / vy;

@@ -631,7 +631,7 @@ Mesh TetMesher::emit() {
   Mesh mesh;
   mesh.points.resize(pointCount);
   mesh.tets.resize(4 * tetCount);
-  ScalarField field{volume_.name, Centering::Point, std::vector<float>(pointCount)};
+  ScalarField field{volume_.name, Centering::Point, UninitVector<float>(pointCount)};
   const bool mirrored = volume_.worldDeterminant() < 0;
   Progress progress("writing tets", n);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 256), [&](const tbb::blocked_range<size_t> &r) {

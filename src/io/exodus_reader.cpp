@@ -502,14 +502,14 @@ private:
   }
 
   /// Values at the chosen time step of a variable shaped (time_step, count).
-  std::vector<float> stepValues(const std::string &name, uint64_t count) {
+  UninitVector<float> stepValues(const std::string &name, uint64_t count) {
     Variable v = variable(name);
     expectShape(v, {timeSteps_, count});
     return toFloat(readSlab<double>(v, {size_t(timeStep_), 0}, {1, count}));
   }
 
-  static std::vector<float> toFloat(const std::vector<double> &values) {
-    return std::vector<float>(values.begin(), values.end());
+  static UninitVector<float> toFloat(const std::vector<double> &values) {
+    return UninitVector<float>(values.begin(), values.end());
   }
 
   void readNodalVariables(UnstructuredGrid &grid, uint64_t nodes) {
@@ -530,7 +530,7 @@ private:
     }
     const std::vector<std::string> varNames = names("name_nod_var", count, "node_variable_");
     for (uint64_t i = 0; i < count; ++i) {
-      std::vector<float> values =
+      UninitVector<float> values =
           combined ? toFloat(readSlab<double>(all, {size_t(timeStep_), i, 0}, {1, 1, nodes}))
                    : stepValues("vals_nod_var" + std::to_string(i + 1), nodes);
       grid.fields.push_back({varNames[i], Centering::Point, std::move(values)});
@@ -546,12 +546,12 @@ private:
     const std::vector<std::string> varNames = names("name_elem_var", count, "element_variable_");
     const uint64_t cells = grid.types.size();
     for (uint64_t i = 0; i < count; ++i) {
-      ScalarField field{varNames[i], Centering::Cell, std::vector<float>(cells, NAN)};
+      ScalarField field{varNames[i], Centering::Cell, UninitVector<float>(cells, NAN)};
       uint64_t first = 0;
       for (auto [block, elements] : blockCells) {
         const std::string name = "vals_elem_var" + std::to_string(i + 1) + "eb" + std::to_string(block);
         if (hasVariable(name)) {
-          std::vector<float> values = stepValues(name, elements);
+          const UninitVector<float> values = stepValues(name, elements);
           std::copy(values.begin(), values.end(), field.values.begin() + ptrdiff_t(first));
         }
         first += elements;

@@ -633,7 +633,7 @@ private:
       const bool point = key.second == Centering::Point;
       const TagMap &map = point ? nodes_ : elements_;
       const uint64_t size = point ? grid_.points.size() : grid_.types.size();
-      ScalarField field{key.first, key.second, std::vector<float>(size, 0.f)};
+      ScalarField field{key.first, key.second, UninitVector<float>(size, 0.f)};
       std::vector<uint8_t> given(size, 0);
       for (const DataBlock *block : blocks) {
         if (block->timeStep != step)

@@ -145,7 +145,8 @@ private:
   }
 
   /// Reads a vector of `n` elements of `components` values of T.
-  template <typename T> uint64_t array(std::vector<T> &values, uint64_t components, const std::string &what) {
+  template <typename T>
+  uint64_t array(UninitVector<T> &values, uint64_t components, const std::string &what) {
     const uint64_t n = count(components * sizeof(T), what);
     values.resize(n * components);
     bytes(values.data(), n * components * sizeof(T));
@@ -171,7 +172,7 @@ private:
     mesh.fields.push_back(std::move(field));
   }
 
-  void checkPointsFinite(const std::vector<Vec3f> &points) const {
+  void checkPointsFinite(std::span<const Vec3f> points) const {
     const uint64_t n = points.size();
     const uint64_t bad = tbb::parallel_reduce(
         tbb::blocked_range<uint64_t>(0, n, 1 << 16), n,
@@ -190,7 +191,7 @@ private:
   /// the thread that then: checks its point indices (signed in the file), winds each cell as VTK expects, and
   /// learns whether the points are numbered by first use (each corner is a point seen before or the next
   /// unseen one). Reading inside the pass spreads the copy from the page cache over the cores too.
-  void readCells(std::vector<uint32_t> &cells, int corners, CellType type, const std::string &what,
+  void readCells(UninitVector<uint32_t> &cells, int corners, CellType type, const std::string &what,
                  Mesh &mesh) {
     const uint64_t cellBytes = uint64_t(corners) * sizeof(uint32_t);
     const uint64_t n = count(cellBytes, what);

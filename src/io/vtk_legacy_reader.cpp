@@ -337,9 +337,10 @@ private:
     }
   }
 
-  template <typename T> std::vector<T> readValues(DataType type, uint64_t count) {
+  /// The `count` values in an Array of them: a std::vector or an UninitVector.
+  template <typename Array> Array readValues(DataType type, uint64_t count) {
     checkRoom(type, count);
-    std::vector<T> values(count);
+    Array values(count);
     readInto(type, count, values.data());
     return values;
   }
@@ -442,7 +443,7 @@ private:
     DataType offsetType = dataType(next[1]);
     if (!isInteger(offsetType))
       failLine("expected an integer type for OFFSETS");
-    std::vector<int64_t> offsets = readValues<int64_t>(offsetType, first);
+    std::vector<int64_t> offsets = readValues<std::vector<int64_t>>(offsetType, first);
     std::string offsetsWhere = where(lineStart_, lineNumber_);
     Line connectivity = readLine();
     if (!connectivity.empty() && upper(connectivity[0]) == "METADATA") {
@@ -454,7 +455,7 @@ private:
     DataType connectivityType = dataType(connectivity[1]);
     if (!isInteger(connectivityType))
       failLine("expected an integer type for CONNECTIVITY");
-    grid_.connectivity = readValues<int64_t>(connectivityType, second);
+    grid_.connectivity = readValues<std::vector<int64_t>>(connectivityType, second);
 
     if (offsets.empty())
       offsets.push_back(0);
@@ -471,7 +472,7 @@ private:
 
   /// The layout before VTK 5.1: each cell is its vertex count followed by its vertices.
   void readCellList(uint64_t cells, uint64_t size) {
-    std::vector<int64_t> list = readValues<int64_t>(DataType::Int32, size);
+    std::vector<int64_t> list = readValues<std::vector<int64_t>>(DataType::Int32, size);
     if (cells > size)
       failAt(cellsWhere_, std::to_string(cells) + " cells cannot fit in " + std::to_string(size) + " values");
     grid_.offsets.assign(1, 0);
@@ -500,7 +501,7 @@ private:
       failLine("a second CELL_TYPES section");
     typesWhere_ = where(lineStart_, lineNumber_);
     uint64_t n = count(line[1], line, "CELL_TYPES n");
-    std::vector<int64_t> codes = readValues<int64_t>(DataType::Int32, n);
+    std::vector<int64_t> codes = readValues<std::vector<int64_t>>(DataType::Int32, n);
     grid_.types.resize(n);
     for (uint64_t i = 0; i < n; ++i) {
       if (codes[i] < 0 || codes[i] > 255)
@@ -622,7 +623,7 @@ private:
     }
     if (components == 0)
       failLine("array '" + name + "' has no components");
-    ScalarField field{std::move(name), centering_, readValues<float>(type, values)};
+    ScalarField field{std::move(name), centering_, readValues<UninitVector<float>>(type, values)};
     if (components > 1) {
       for (uint64_t i = 0; i < tuples_; ++i) {
         double sum = 0.0;

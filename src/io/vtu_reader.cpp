@@ -143,18 +143,33 @@ template <typename Pred> uint64_t findFirst(uint64_t n, Pred &&bad) {
       [](uint64_t a, uint64_t b) { return std::min(a, b); });
 }
 
-/// Converts `count` packed values of `type` (byte-swapped when `swap`) to Dst.
-template <typename Dst>
-void convert(ScalarType type, bool swap, const uint8_t *src, uint64_t count, Dst *dst) {
+/// How values become the Dst that a reader stores: as C++ converts them.
+template <typename Dst> struct CastTo {
+  template <typename Value> Dst operator()(Value value) const { return static_cast<Dst>(value); }
+};
+
+/// Point indices narrowed to 32 bits as they are read (for at most 2^32 - 1 points), to be written and read
+/// again in half the memory. An index outside [0, pointCount), as VTK's 64-bit value, becomes kOutside.
+struct NarrowPointIndex {
+  static constexpr uint32_t kOutside = UINT32_MAX;
+  uint64_t pointCount;
+
+  template <typename Value> uint32_t operator()(Value value) const {
+    const auto index = static_cast<int64_t>(value);
+    return index >= 0 && uint64_t(index) < pointCount ? uint32_t(index) : kOutside;
+  }
+};
+
+/// Converts `count` packed values of `type` (byte-swapped when `swap`) to Dst by `to`.
+template <typename Dst, typename To>
+void convert(ScalarType type, bool swap, const uint8_t *src, uint64_t count, Dst *dst, const To &to) {
   visitType(type, [&](auto zero) {
     using Src = decltype(zero);
-    parallelChunks(count, [&](uint64_t begin, uint64_t end) {
-      for (uint64_t i = begin; i < end; ++i) {
-        Src value;
-        std::memcpy(&value, src + i * sizeof(Src), sizeof(Src));
-        dst[i] = static_cast<Dst>(swap ? byteSwapped(value) : value);
-      }
-    });
+    for (uint64_t i = 0; i < count; ++i) {
+      Src value;
+      std::memcpy(&value, src + i * sizeof(Src), sizeof(Src));
+      dst[i] = to(swap ? byteSwapped(value) : value);
+    }
   });
 }
 
@@ -299,6 +314,27 @@ struct Payload {
 /// allocated).
 constexpr uint64_t maxZlibRatio = 1032;
 
+/// The first corrupt zlib block by index, among blocks inflated in parallel: so that the error does not
+/// depend on thread timing.
+class FirstCorruptBlock {
+public:
+  void note(uint64_t block, const char *problem) {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    if (block < block_) {
+      block_ = block;
+      problem_ = problem;
+    }
+  }
+  bool found() const { return block_ != UINT64_MAX; }
+  uint64_t block() const { return block_; }
+  const char *problem() const { return problem_; }
+
+private:
+  std::mutex mutex_;
+  uint64_t block_ = UINT64_MAX;
+  const char *problem_ = "";
+};
+
 /// Inflates one zlib block of known sizes; returns what is wrong with it, or nullptr.
 const char *inflateBlock(const uint8_t *source, uint64_t sourceSize, uint8_t *target, uint64_t targetSize) {
 #ifdef UVR_HAVE_LIBDEFLATE
@@ -325,13 +361,13 @@ const char *inflateBlock(const uint8_t *source, uint64_t sourceSize, uint8_t *ta
 /// An UnstructuredGrid whose cell arrays, the largest, are Buffers: decoded straight into them, and viewed in
 /// place by buildMesh.
 struct VtuGrid {
-  std::vector<Vec3f> points;
-  Buffer<int64_t> offsets; ///< cell count + 1 entries, offsets[0] == 0
-  Buffer<int64_t> connectivity;
+  UninitVector<Vec3f> points;
+  Buffer<int64_t> offsets;       ///< cell count + 1 entries, offsets[0] == 0
+  Buffer<uint32_t> connectivity; ///< narrowed as it is read (see NarrowPointIndex)
   Buffer<uint8_t> types;
   std::vector<ScalarField> fields;
 
-  CellArraysView cells() const { return {offsets, connectivity, types}; }
+  CellArrays<uint32_t> cells() const { return {offsets, connectivity, types}; }
 };
 
 class VtuReader {
@@ -584,28 +620,65 @@ private:
       std::memcpy(dst, payload.data, payload.size);
       return;
     }
-    // The first corrupt block by index, so that the error does not depend on thread timing.
-    std::mutex mutex;
-    uint64_t badBlock = UINT64_MAX;
-    const char *why = "";
+    FirstCorruptBlock corrupt;
     tbb::parallel_for(size_t(0), payload.blocks.size(), [&](size_t i) {
       const Payload::Block &block = payload.blocks[i];
-      const char *problem =
-          inflateBlock(payload.data + block.source, block.sourceSize, dst + block.target, block.targetSize);
-      if (!problem)
-        return;
-      const std::lock_guard<std::mutex> lock(mutex);
-      if (i < badBlock) {
-        badBlock = i;
-        why = problem;
-      }
+      if (const char *problem = inflateBlock(payload.data + block.source, block.sourceSize,
+                                             dst + block.target, block.targetSize))
+        corrupt.note(i, problem);
     });
-    if (badBlock != UINT64_MAX)
-      fail(array, payload.position + payload.blocks[badBlock].source,
-           "zlib block " + std::to_string(badBlock) + " is corrupt (" + why + ")");
+    failIfCorrupt(array, payload, corrupt);
   }
 
-  template <typename T> void parseAscii(const ArrayInfo &array, uint64_t count, T *out) const {
+  void failIfCorrupt(const ArrayInfo &array, const Payload &payload, const FirstCorruptBlock &corrupt) const {
+    if (corrupt.found())
+      fail(array, payload.position + payload.blocks[corrupt.block()].source,
+           "zlib block " + std::to_string(corrupt.block()) + " is corrupt (" + corrupt.problem() + ")");
+  }
+
+  /// Calls use(bytes, first, n) in parallel on runs of the payload's uncompressed bytes, each holding values
+  /// [first, first + n) of `valueBytes`. zlib blocks are inflated one by one into a buffer of the task's, so
+  /// that each run is converted while in cache, not written to memory and read back; blocks that split a
+  /// value (VTK writes none) are inflated whole first.
+  template <typename Use>
+  void forEachRun(const ArrayInfo &array, const Payload &payload, uint64_t valueBytes, Use &&use) const {
+    const std::vector<Payload::Block> &blocks = payload.blocks;
+    const bool splitValues = std::any_of(blocks.begin(), blocks.end(), [&](const Payload::Block &block) {
+      return block.target % valueBytes != 0 || block.targetSize % valueBytes != 0;
+    });
+    if (blocks.empty() || splitValues) {
+      Buffer<uint8_t> inflated;
+      const uint8_t *bytes = payload.data;
+      if (!blocks.empty()) {
+        inflated = Buffer<uint8_t>(payload.size);
+        decode(array, payload, inflated.data());
+        bytes = inflated.data();
+      }
+      parallelChunks(payload.size / valueBytes, [&](uint64_t begin, uint64_t end) {
+        use(bytes + begin * valueBytes, begin, end - begin);
+      });
+      return;
+    }
+    FirstCorruptBlock corrupt;
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, blocks.size()), [&](const tbb::blocked_range<size_t> &r) {
+      uint64_t largest = 0;
+      for (size_t i = r.begin(); i < r.end(); ++i)
+        largest = std::max(largest, blocks[i].targetSize);
+      Buffer<uint8_t> run(largest);
+      for (size_t i = r.begin(); i < r.end(); ++i) {
+        const Payload::Block &block = blocks[i];
+        if (const char *problem =
+                inflateBlock(payload.data + block.source, block.sourceSize, run.data(), block.targetSize))
+          corrupt.note(i, problem);
+        else
+          use(run.data(), block.target / valueBytes, block.targetSize / valueBytes);
+      }
+    });
+    failIfCorrupt(array, payload, corrupt);
+  }
+
+  template <typename T, typename To>
+  void parseAscii(const ArrayInfo &array, uint64_t count, T *out, const To &to) const {
     const char *p = array.text.data(), *end = p + array.text.size();
     auto skipSpace = [&] {
       while (p != end && isSpace(*p))
@@ -624,7 +697,7 @@ private:
             std::conditional_t<std::is_same_v<decltype(zero), uint64_t>, uint64_t, int64_t>>;
         Parsed value{};
         auto [stop, ec] = std::from_chars(p, tokenEnd, value);
-        out[i] = static_cast<T>(value);
+        out[i] = to(value);
         return ec == std::errc() && stop == tokenEnd;
       });
       if (!ok)
@@ -651,23 +724,21 @@ private:
     return locate(array, bytes);
   }
 
-  /// Writes the array's `count` values (as prepared) to out, converted to T.
-  template <typename T>
-  void fill(const ArrayInfo &array, const Payload &payload, uint64_t count, T *out) const {
+  /// Writes the array's `count` values (as prepared) to out, converted to T by `to`.
+  template <typename T, typename To = CastTo<T>>
+  void fill(const ArrayInfo &array, const Payload &payload, uint64_t count, T *out, const To &to = {}) const {
     if (array.format == Format::Ascii) {
-      parseAscii(array, count, out);
-    } else if (array.type == scalarTypeOf<T>() && !swap_) {
+      parseAscii(array, count, out, to);
+    } else if (std::is_same_v<To, CastTo<T>> && array.type == scalarTypeOf<T>() && !swap_) {
       decode(array, payload, reinterpret_cast<uint8_t *>(out));
-    } else if (payload.blocks.empty()) {
-      convert(array.type, swap_, payload.data, count, out);
     } else {
-      Buffer<uint8_t> bytes(payload.size);
-      decode(array, payload, bytes.data());
-      convert(array.type, swap_, bytes.data(), count, out);
+      forEachRun(array, payload, sizeOf(array.type), [&](const uint8_t *bytes, uint64_t first, uint64_t n) {
+        convert(array.type, swap_, bytes, n, out + first, to);
+      });
     }
   }
 
-  /// The array's `count` values in an Array of them: a std::vector or a Buffer.
+  /// The array's `count` values in an Array of them: an UninitVector or a Buffer.
   template <typename Array> Array readValues(const ArrayInfo &array, uint64_t count) const {
     Payload payload = prepare(array, count);
     Array values(count);
@@ -732,15 +803,19 @@ private:
       if (bad < cellCount)
         fail(offsets, offsets.position, "offsets decrease (or start below 0) at cell " + std::to_string(bad));
 
-      uint64_t connectivityCount = uint64_t(grid.offsets[cellCount]);
-      grid.connectivity = readValues<Buffer<int64_t>>(connectivity, connectivityCount);
-      bad = findFirst(connectivityCount, [&](uint64_t i) {
-        return grid.connectivity[i] < 0 || uint64_t(grid.connectivity[i]) >= pointCount;
-      });
-      if (bad < connectivityCount)
+      const uint64_t connectivityCount = uint64_t(grid.offsets[cellCount]);
+      if (pointCount > NarrowPointIndex::kOutside)
+        throw Error(path_, "", "more than 2^32 points are not supported"); // as buildMesh says
+      Payload indices = prepare(connectivity, connectivityCount);
+      grid.connectivity = Buffer<uint32_t>(connectivityCount);
+      fill(connectivity, indices, connectivityCount, grid.connectivity.data(), NarrowPointIndex{pointCount});
+      bad = findFirst(connectivityCount,
+                      [&](uint64_t i) { return grid.connectivity[i] == NarrowPointIndex::kOutside; });
+      if (bad < connectivityCount) // named by its value in the file, read again
         fail(connectivity, connectivity.position,
-             "point index " + std::to_string(grid.connectivity[bad]) + " at entry " + std::to_string(bad) +
-                 " is outside [0, " + std::to_string(pointCount) + ")");
+             "point index " +
+                 std::to_string(readValues<Buffer<int64_t>>(connectivity, connectivityCount)[bad]) +
+                 " at entry " + std::to_string(bad) + " is outside [0, " + std::to_string(pointCount) + ")");
 
       if (types.type == ScalarType::UInt8) {
         grid.types = readValues<Buffer<uint8_t>>(types, cellCount);
@@ -770,9 +845,9 @@ private:
       uint64_t count = 0;
       if (multiplyOverflows(tuples, array.components, count))
         fail(array, array.position, "value count overflows");
-      ScalarField field{array.name, centering, readValues<std::vector<float>>(array, count)};
+      ScalarField field{array.name, centering, readValues<UninitVector<float>>(array, count)};
       if (array.components > 1) {
-        std::vector<float> magnitude(tuples);
+        UninitVector<float> magnitude(tuples);
         uint64_t components = array.components;
         parallelChunks(tuples, [&](uint64_t begin, uint64_t end) {
           for (uint64_t i = begin; i < end; ++i) {
@@ -792,7 +867,7 @@ private:
   VtuGrid merge(std::vector<VtuGrid> pieces, const std::vector<uint64_t> &positions) const {
     if (pieces.size() == 1)
       return std::move(pieces[0]);
-    uint64_t cellCount = 0, connectivityCount = 0;
+    uint64_t pointCount = 0, cellCount = 0, connectivityCount = 0;
     for (size_t p = 0; p < pieces.size(); ++p) {
       const VtuGrid &piece = pieces[p];
       bool sameFields = piece.fields.size() == pieces[0].fields.size();
@@ -801,19 +876,22 @@ private:
                      piece.fields[f].centering == pieces[0].fields[f].centering;
       if (!sameFields)
         fail(positions[p], "this <Piece> has other data arrays than the first one");
+      pointCount += piece.points.size();
       cellCount += piece.types.size();
       connectivityCount += piece.connectivity.size();
     }
+    if (pointCount > NarrowPointIndex::kOutside)
+      throw Error(path_, "", "more than 2^32 points are not supported"); // as buildMesh says
     VtuGrid grid;
     grid.offsets = Buffer<int64_t>(cellCount + 1);
     grid.offsets[0] = 0;
-    grid.connectivity = Buffer<int64_t>(connectivityCount);
+    grid.connectivity = Buffer<uint32_t>(connectivityCount);
     grid.types = Buffer<uint8_t>(cellCount);
     for (const ScalarField &f : pieces[0].fields)
       grid.fields.push_back({f.name, f.centering, {}});
     uint64_t cellBase = 0, connectivityBase = 0;
     for (VtuGrid &piece : pieces) {
-      const auto pointBase = int64_t(grid.points.size());
+      const auto pointBase = uint32_t(grid.points.size());
       grid.points.insert(grid.points.end(), piece.points.begin(), piece.points.end());
       for (size_t i = 0; i < piece.types.size(); ++i) {
         grid.offsets[cellBase + i + 1] = piece.offsets[i + 1] + int64_t(connectivityBase);

@@ -68,8 +68,8 @@ std::string escapeXml(const std::string &text) {
 class CellSequence {
 public:
   explicit CellSequence(const Mesh &mesh) {
-    const std::array<const std::vector<uint32_t> *, 4> arrays = {&mesh.tets, &mesh.pyramids, &mesh.wedges,
-                                                                 &mesh.hexes};
+    const std::array<const UninitVector<uint32_t> *, 4> arrays = {&mesh.tets, &mesh.pyramids, &mesh.wedges,
+                                                                  &mesh.hexes};
     uint64_t cells = 0, entries = 0;
     for (int t = 0; t < 4; ++t) {
       parts_[t] = {arrays[t]->data(), cells, entries, kCorners[t], kTypes[t]};

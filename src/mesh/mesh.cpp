@@ -69,7 +69,7 @@ float orientedVolume(Vec3f a, Vec3f b, Vec3f c, Vec3f d) { return dot(b - a, cro
 
 /// Positive for cells wound as VTK expects. Hexahedra and pyramids by the Jacobian at the centre; VTK's wedge
 /// base (0,1,2) faces away from the top, hence its sign.
-float windingSign(CellType type, const uint32_t *v, const std::vector<Vec3f> &p) {
+float windingSign(CellType type, const uint32_t *v, std::span<const Vec3f> p) {
   switch (type) {
   case CellType::Tetra:
     return orientedVolume(p[v[0]], p[v[1]], p[v[2]], p[v[3]]);
@@ -132,14 +132,14 @@ int slotOf(CellType type) {
 
 /// The cell's point count, when its offsets do not decrease. Unsigned, as a chunk checked in parallel may
 /// start past an earlier chunk's bad offsets.
-bool pointCount(const CellArraysView &grid, size_t c, uint64_t &count) {
+template <typename Index> bool pointCount(const CellArrays<Index> &grid, size_t c, uint64_t &count) {
   count = uint64_t(grid.offsets[c + 1]) - uint64_t(grid.offsets[c]);
   return grid.offsets[c + 1] >= grid.offsets[c];
 }
 
 /// Whether buildMesh can take cell c: offsets that do not decrease, and a volume cell with points for all of
 /// its corners or a lower-dimensional one (skipped).
-bool wellFormed(const CellArraysView &grid, size_t c) {
+template <typename Index> bool wellFormed(const CellArrays<Index> &grid, size_t c) {
   uint64_t count;
   if (!pointCount(grid, c, count))
     return false;
@@ -150,7 +150,8 @@ bool wellFormed(const CellArraysView &grid, size_t c) {
 }
 
 /// Says why cell c is not wellFormed.
-[[noreturn]] void throwMalformed(const CellArraysView &grid, size_t c, const std::string &source) {
+template <typename Index>
+[[noreturn]] void throwMalformed(const CellArrays<Index> &grid, size_t c, const std::string &source) {
   const std::string cell = "cell " + std::to_string(c);
   const uint8_t vtkType = grid.types[c];
   uint64_t count;
@@ -164,12 +165,17 @@ bool wellFormed(const CellArraysView &grid, size_t c) {
   throw Error(source, cell, "unsupported VTK cell type " + std::to_string(vtkType));
 }
 
+/// Whether a point index lies outside [0, pointCount); a negative one wraps to 2^63 or more.
+template <typename Index> bool outside(Index id, uint64_t pointCount) {
+  return uint64_t(int64_t(id)) >= pointCount;
+}
+
 constexpr CellKind kSlotKinds[4] = {
     {CellType::Tetra, 4}, {CellType::Pyramid, 5}, {CellType::Wedge, 6}, {CellType::Hexahedron, 8}};
 
 } // namespace
 
-bool orientCell(CellType type, uint32_t *v, const std::vector<Vec3f> &points) {
+bool orientCell(CellType type, uint32_t *v, std::span<const Vec3f> points) {
   if (windingSign(type, v, points) >= 0.f)
     return false;
   reverseWinding(type, v);
@@ -197,7 +203,8 @@ Mesh buildMesh(UnstructuredGrid &&grid, const std::string &source) {
                    std::move(grid.fields), source);
 }
 
-Mesh buildMesh(std::vector<Vec3f> &&points, CellArraysView grid, std::vector<ScalarField> &&fields,
+template <typename Index>
+Mesh buildMesh(UninitVector<Vec3f> &&points, CellArrays<Index> grid, std::vector<ScalarField> &&fields,
                const std::string &source) {
   const size_t cellCount = grid.types.size();
   if (grid.offsets.size() != cellCount + 1)
@@ -247,15 +254,6 @@ Mesh buildMesh(std::vector<Vec3f> &&points, CellArraysView grid, std::vector<Sca
   if (points.size() > UINT32_MAX)
     throw Error(source, "", "more than 2^32 points are not supported");
 
-  // std::vector zeroes the mesh's cell arrays on one thread: a task of its own, while the others go on.
-  tbb::task_group zeroing;
-  zeroing.run([&] {
-    mesh.tets.resize(perType[0] * 4);
-    mesh.pyramids.resize(perType[1] * 5);
-    mesh.wedges.resize(perType[2] * 6);
-    mesh.hexes.resize(perType[3] * 8);
-  });
-
   // Pass 2 writes each type's cells (32-bit indices) and the cell field values in type order to Buffers. The
   // mesh's arrays take them once the cells are wound and sorted along orderSpatially's Morton curve.
   mesh.points = std::move(points);
@@ -283,9 +281,9 @@ Mesh buildMesh(std::vector<Vec3f> &&points, CellArraysView grid, std::vector<Sca
         continue;
       const int s = slotOf(kind.type);
       uint32_t *v = typeCells[s].data() + next[s] * uint64_t(kind.corners);
-      const int64_t *ids = &grid.connectivity[size_t(grid.offsets[c])];
+      const Index *ids = &grid.connectivity[size_t(grid.offsets[c])];
       for (int i = 0; i < kind.corners; ++i) {
-        if (ids[i] < 0 || uint64_t(ids[i]) >= mesh.points.size()) {
+        if (outside(ids[i], mesh.points.size())) {
           chunk.firstBadIndex = c;
           return;
         }
@@ -323,18 +321,18 @@ Mesh buildMesh(std::vector<Vec3f> &&points, CellArraysView grid, std::vector<Sca
   for (const Chunk &chunk : chunks) {
     if (chunk.firstBadIndex != SIZE_MAX) {
       const size_t c = chunk.firstBadIndex;
-      const int64_t *ids = &grid.connectivity[size_t(grid.offsets[c])];
-      const int64_t bad = *std::find_if(ids, ids + vertexCount(grid.types[c]), [&](int64_t id) {
-        return id < 0 || uint64_t(id) >= mesh.points.size();
-      });
+      const Index *ids = &grid.connectivity[size_t(grid.offsets[c])];
+      const Index bad = *std::find_if(ids, ids + vertexCount(grid.types[c]),
+                                      [&](Index id) { return outside(id, mesh.points.size()); });
       throw Error(source, "cell " + std::to_string(c),
                   "point index " + std::to_string(bad) + " outside [0, " +
                       std::to_string(mesh.points.size()) + ")");
     }
   }
-  mesh.invertedCells =
-      windAndKey.operator()<CellType::Tetra, 4>(0) + windAndKey.operator()<CellType::Pyramid, 5>(1) +
-      windAndKey.operator()<CellType::Wedge, 6>(2) + windAndKey.operator()<CellType::Hexahedron, 8>(3);
+  mesh.invertedCells = windAndKey.template operator()<CellType::Tetra, 4>(0) +
+                       windAndKey.template operator()<CellType::Pyramid, 5>(1) +
+                       windAndKey.template operator()<CellType::Wedge, 6>(2) +
+                       windAndKey.template operator()<CellType::Hexahedron, 8>(3);
   for (size_t f = 0; f < fields.size(); ++f) {
     const ScalarField &field = fields[f];
     if (field.centering == Centering::Cell && field.values.size() != cellCount)
@@ -350,25 +348,38 @@ Mesh buildMesh(std::vector<Vec3f> &&points, CellArraysView grid, std::vector<Sca
   std::array<Buffer<uint32_t>, 4> orders;
   for (size_t s = 0; s < 4; ++s)
     orders[s] = sortedOrder(typeKeys[s]);
-  zeroing.wait();
-  auto placeCells = [&]<size_t Corners>(size_t s, std::vector<uint32_t> &cells) {
-    gather<Corners>(cells.data(), typeCells[s].data(), perType[s], orders[s]);
-  };
-  placeCells.operator()<4>(0, mesh.tets);
-  placeCells.operator()<5>(1, mesh.pyramids);
-  placeCells.operator()<6>(2, mesh.wedges);
-  placeCells.operator()<8>(3, mesh.hexes);
-  for (size_t f = 0; f < fields.size(); ++f) {
-    if (fields[f].centering == Centering::Cell) {
-      fields[f].values.resize(keptCells);
-      for (size_t s = 0; s < 4; ++s)
-        gather<1>(fields[f].values.data() + firstCell[s], typeOrderValues[f].data() + firstCell[s],
-                  perType[s], orders[s]);
+  // The cells are placed in a serial pass (see FirstUseNumbering), the cell fields meanwhile on the other
+  // threads.
+  tbb::task_group cellFields;
+  cellFields.run([&] {
+    for (size_t f = 0; f < fields.size(); ++f) {
+      if (fields[f].centering == Centering::Cell) {
+        fields[f].values.resize(keptCells);
+        for (size_t s = 0; s < 4; ++s)
+          gather<1>(fields[f].values.data() + firstCell[s], typeOrderValues[f].data() + firstCell[s],
+                    perType[s], orders[s]);
+      }
     }
-    mesh.fields.push_back(std::move(fields[f]));
-  }
-  numberPointsByFirstUse(mesh);
+  });
+  FirstUseNumbering numbering(mesh.points.size());
+  auto placeCells = [&]<size_t Corners>(size_t s, UninitVector<uint32_t> &cells) {
+    cells.resize(perType[s] * Corners);
+    numbering.place<Corners>(cells.data(), typeCells[s].data(), perType[s], orders[s]);
+  };
+  placeCells.template operator()<4>(0, mesh.tets);
+  placeCells.template operator()<5>(1, mesh.pyramids);
+  placeCells.template operator()<6>(2, mesh.wedges);
+  placeCells.template operator()<8>(3, mesh.hexes);
+  cellFields.wait();
+  for (ScalarField &field : fields)
+    mesh.fields.push_back(std::move(field));
+  numbering.reorderPoints(mesh);
   return mesh;
 }
+
+template Mesh buildMesh(UninitVector<Vec3f> &&, CellArrays<int64_t>, std::vector<ScalarField> &&,
+                        const std::string &);
+template Mesh buildMesh(UninitVector<Vec3f> &&, CellArrays<uint32_t>, std::vector<ScalarField> &&,
+                        const std::string &);
 
 } // namespace uvr

@@ -1,6 +1,7 @@
 // The host mesh: points, cells grouped by type, and scalar fields.
 #pragma once
 
+#include "core/buffer.h"
 #include "core/vec.h"
 
 #include <cstdint>
@@ -19,12 +20,12 @@ enum class Centering : uint8_t { Point, Cell };
 struct ScalarField {
   std::string name;
   Centering centering = Centering::Point;
-  std::vector<float> values;
+  UninitVector<float> values;
 };
 
 /// Cells exactly as VTK files store them (offsets + connectivity + type codes): what every reader produces.
 struct UnstructuredGrid {
-  std::vector<Vec3f> points;
+  UninitVector<Vec3f> points;
   std::vector<int64_t> offsets; ///< cell count + 1 entries, offsets[0] == 0
   std::vector<int64_t> connectivity;
   std::vector<uint8_t> types; ///< VTK cell type codes, any dimension
@@ -36,13 +37,14 @@ int vertexCount(uint8_t vtkType);
 
 /// Cells grouped by type in the order tets, pyramids, wedges, hexahedra (umesh's layout: no offsets, no type
 /// array). A cell's index is its position in that order; cell fields follow it. Every cell is wound as VTK
-/// expects (positive volume): inverted cells are reordered on construction.
+/// expects (positive volume): inverted cells are reordered on construction. The arrays start uninitialized
+/// when sized, for the readers' parallel loops to fill.
 struct Mesh {
-  std::vector<Vec3f> points;
-  std::vector<uint32_t> tets;     ///< 4 point indices per cell
-  std::vector<uint32_t> pyramids; ///< 5
-  std::vector<uint32_t> wedges;   ///< 6
-  std::vector<uint32_t> hexes;    ///< 8
+  UninitVector<Vec3f> points;
+  UninitVector<uint32_t> tets;     ///< 4 point indices per cell
+  UninitVector<uint32_t> pyramids; ///< 5
+  UninitVector<uint32_t> wedges;   ///< 6
+  UninitVector<uint32_t> hexes;    ///< 8
   std::vector<ScalarField> fields;
 
   uint64_t skippedCells = 0;  ///< lower-dimensional cells of the file that were not kept
@@ -61,22 +63,26 @@ struct Mesh {
 
 /// Reorders the corners `v` of a cell of `type` so that it is wound as VTK expects (positive volume; VTK's
 /// wedge base faces away from its top). Returns whether it was inverted.
-bool orientCell(CellType type, uint32_t *v, const std::vector<Vec3f> &points);
+bool orientCell(CellType type, uint32_t *v, std::span<const Vec3f> points);
 
 /// Groups the volume cells of `grid` by type, fixes their winding, orders them spatially and reorders the
 /// fields to match. Lower-dimensional cells are dropped and counted; `source` names the file in errors.
 Mesh buildMesh(UnstructuredGrid &&grid, const std::string &source);
 
 /// The cell arrays of an unstructured grid as VTK stores them, viewed in place (e.g. numpy arrays handed over
-/// from Python), so that building a mesh from them copies nothing twice.
-struct CellArraysView {
+/// from Python), so that building a mesh from them copies nothing twice. Point indices are VTK's 64 bits, or
+/// 32 where a reader narrowed them as it checked them (half the memory to write and read again).
+template <typename Index> struct CellArrays {
   std::span<const int64_t> offsets; ///< cell count + 1 entries, offsets[0] == 0
-  std::span<const int64_t> connectivity;
+  std::span<const Index> connectivity;
   std::span<const uint8_t> types;
 };
+using CellArraysView = CellArrays<int64_t>;
 
-/// buildMesh over cells viewed in place; the offsets are checked against the connectivity.
-Mesh buildMesh(std::vector<Vec3f> &&points, CellArraysView cells, std::vector<ScalarField> &&fields,
+/// buildMesh over cells viewed in place; the offsets are checked against the connectivity. For int64_t and
+/// uint32_t point indices.
+template <typename Index>
+Mesh buildMesh(UninitVector<Vec3f> &&points, CellArrays<Index> cells, std::vector<ScalarField> &&fields,
                const std::string &source);
 
 /// Sorts each cell type's cells along a Morton curve through their centroids and numbers the points by first

@@ -21,8 +21,9 @@ constexpr size_t kBuckets = size_t(1) << kDigitBits;
 
 size_t digit(uint64_t key, int shift) { return size_t(key >> shift) & (kBuckets - 1); }
 
-/// Writes [begin, end) to out ordered by one digit, ties in their order.
-void countingSort(const uint64_t *begin, const uint64_t *end, uint64_t *out, int shift) {
+/// Writes [begin, end) to out ordered by one digit, ties in their order: the keys, or as Out = uint32_t their
+/// indices.
+template <typename Out> void countingSort(const uint64_t *begin, const uint64_t *end, Out *out, int shift) {
   std::array<size_t, kBuckets> next{};
   for (const uint64_t *key = begin; key != end; ++key)
     ++next[digit(*key, shift)];
@@ -30,14 +31,15 @@ void countingSort(const uint64_t *begin, const uint64_t *end, uint64_t *out, int
   for (size_t &n : next)
     position += std::exchange(n, position);
   for (const uint64_t *key = begin; key != end; ++key)
-    out[next[digit(*key, shift)]++] = *key;
+    out[next[digit(*key, shift)]++] = Out(*key);
 }
 
-/// Sorts keys (code << 32 | index) by their code, ties in index order. A stable radix sort on the code's 30
-/// bits, three digits of 10: first by the top digit, in parallel over chunks of keys (each chunk counts its
-/// digits, then writes its keys after those of earlier chunks with the same digit); then each of the 1024
-/// runs of equal top digits by the lower two, in parallel over runs, each small enough to stay in cache.
-void radixSortByCode(Buffer<uint64_t> &keys) {
+/// The indices of keys (code << 32 | index) sorted by their code, ties in index order. A stable radix sort on
+/// the code's 30 bits, three digits of 10: first by the top digit, in parallel over chunks of keys (each
+/// chunk counts its digits, then writes its keys after those of earlier chunks with the same digit); then
+/// each of the 1024 runs of equal top digits by the lower two, in parallel over runs, each small enough to
+/// stay in cache. The last pass writes the indices alone. The keys are left in no useful order.
+Buffer<uint32_t> radixSortedIndices(Buffer<uint64_t> &keys) {
   constexpr int kLowShift = 32, kTopShift = 32 + 2 * kDigitBits;
   constexpr size_t kChunkKeys = size_t(1) << 16;
   const size_t chunkCount = (keys.size() + kChunkKeys - 1) / kChunkKeys;
@@ -66,23 +68,30 @@ void radixSortByCode(Buffer<uint64_t> &keys) {
     for (const uint64_t *key = begin; key != end; ++key)
       scratch[position[digit(*key, kTopShift)]++] = *key;
   });
+  Buffer<uint32_t> indices(keys.size());
   tbb::parallel_for(size_t(0), kBuckets, [&](size_t b) {
     const size_t first = runStart[b], last = runStart[b + 1];
     countingSort(scratch.data() + first, scratch.data() + last, keys.data() + first, kLowShift);
-    countingSort(keys.data() + first, keys.data() + last, scratch.data() + first, kLowShift + kDigitBits);
+    countingSort(keys.data() + first, keys.data() + last, indices.data() + first, kLowShift + kDigitBits);
   });
-  std::swap(keys, scratch);
+  return indices;
+}
+
+/// A copy of items [0, count), made in parallel.
+template <typename T> Buffer<T> copyOf(const T *items, size_t count) {
+  Buffer<T> copy(count);
+  parallelChunks(count, 1 << 16, [&](size_t begin, size_t end) {
+    std::copy(items + begin, items + end, copy.data() + begin);
+  });
+  return copy;
 }
 
 /// Item offset + i becomes the old item offset + order[i].
-template <size_t Stride, typename T>
-void permute(std::vector<T> &values, std::span<const uint32_t> order, size_t offset = 0) {
-  T *items = values.data() + offset * Stride;
-  Buffer<T> old(order.size() * Stride);
-  parallelChunks(old.size(), 1 << 16, [&](size_t begin, size_t end) {
-    std::copy(items + begin, items + end, old.data() + begin);
-  });
-  gather<Stride>(items, old.data(), order.size(), order);
+template <typename T>
+void permute(UninitVector<T> &values, std::span<const uint32_t> order, size_t offset = 0) {
+  T *items = values.data() + offset;
+  const Buffer<T> old = copyOf(items, order.size());
+  gather<1>(items, old.data(), order.size(), order);
 }
 
 } // namespace
@@ -90,35 +99,40 @@ void permute(std::vector<T> &values, std::span<const uint32_t> order, size_t off
 Buffer<uint32_t> sortedOrder(Buffer<uint64_t> &keys) {
   if (std::is_sorted(keys.begin(), keys.end()))
     return {};
-  radixSortByCode(keys);
-  Buffer<uint32_t> order(keys.size());
-  parallelChunks(keys.size(), 1 << 12, [&](size_t begin, size_t end) {
-    for (size_t i = begin; i < end; ++i)
-      order[i] = uint32_t(keys[i]);
-  });
-  return order;
+  return radixSortedIndices(keys);
 }
 
-void numberPointsByFirstUse(Mesh &mesh) {
-  constexpr uint32_t kUnused = 0xffffffffu;
-  std::vector<uint32_t> newIndex(mesh.points.size(), kUnused);
-  uint32_t next = 0;
-  for (std::vector<uint32_t> *cells : {&mesh.tets, &mesh.pyramids, &mesh.wedges, &mesh.hexes})
-    for (uint32_t &v : *cells) {
-      if (newIndex[v] == kUnused)
-        newIndex[v] = next++;
-      v = newIndex[v];
-    }
-  for (uint32_t &index : newIndex)
+void FirstUseNumbering::renumberAfterFirstHalf(uint32_t *corners, size_t count,
+                                               const std::vector<uint32_t> &ownIndex, uint32_t ownPoints) {
+  // The second half's points in the order it first used them, then the number each gets overall: its own
+  // number where the first half did not use it.
+  Buffer<uint32_t> overall(ownPoints);
+  for (size_t point = 0; point < ownIndex.size(); ++point)
+    if (ownIndex[point] != kUnused)
+      overall[ownIndex[point]] = uint32_t(point);
+  for (uint32_t &number : overall) {
+    uint32_t &index = newIndex_[number];
     if (index == kUnused)
-      index = next++;
-  std::vector<uint32_t> order(mesh.points.size());
+      index = next_++;
+    number = index;
+  }
+  parallelChunks(count, 1 << 16, [&](size_t begin, size_t end) {
+    for (size_t i = begin; i < end; ++i)
+      corners[i] = overall[corners[i]];
+  });
+}
+
+void FirstUseNumbering::reorderPoints(Mesh &mesh) {
+  for (uint32_t &index : newIndex_)
+    if (index == kUnused)
+      index = next_++;
+  Buffer<uint32_t> order(newIndex_.size());
   for (size_t i = 0; i < order.size(); ++i)
-    order[newIndex[i]] = uint32_t(i);
-  permute<1>(mesh.points, order);
+    order[newIndex_[i]] = uint32_t(i);
+  permute(mesh.points, order);
   for (ScalarField &field : mesh.fields)
     if (field.centering == Centering::Point)
-      permute<1>(field.values, order);
+      permute(field.values, order);
 }
 
 void orderSpatially(Mesh &mesh) {
@@ -127,8 +141,9 @@ void orderSpatially(Mesh &mesh) {
   const CellKeys cellKeys(mesh.bounds());
 
   // Cells: each type array on its own, so that the type order (and thus cell indices' meaning) is kept.
+  FirstUseNumbering numbering(mesh.points.size());
   size_t firstCell = 0;
-  auto orderCells = [&]<size_t Corners>(std::vector<uint32_t> &cells) {
+  auto orderCells = [&]<size_t Corners>(UninitVector<uint32_t> &cells) {
     const size_t count = cells.size() / Corners;
     Buffer<uint64_t> keys(count);
     parallelChunks(count, 1 << 12, [&](size_t begin, size_t end) {
@@ -136,11 +151,13 @@ void orderSpatially(Mesh &mesh) {
         keys[c] = cellKeys.key(&cells[c * Corners], int(Corners), mesh.points, c);
     });
     const Buffer<uint32_t> order = sortedOrder(keys);
-    if (!order.empty()) {
-      permute<Corners>(cells, order);
+    if (order.empty()) {
+      numbering.place<Corners>(cells.data(), cells.data(), count, order);
+    } else {
+      numbering.place<Corners>(cells.data(), copyOf(cells.data(), cells.size()).data(), count, order);
       for (ScalarField &field : mesh.fields)
         if (field.centering == Centering::Cell)
-          permute<1>(field.values, order, firstCell);
+          permute(field.values, order, firstCell);
     }
     firstCell += count;
   };
@@ -148,7 +165,7 @@ void orderSpatially(Mesh &mesh) {
   orderCells.operator()<5>(mesh.pyramids);
   orderCells.operator()<6>(mesh.wedges);
   orderCells.operator()<8>(mesh.hexes);
-  numberPointsByFirstUse(mesh);
+  numbering.reorderPoints(mesh);
 }
 
 } // namespace uvr

@@ -7,6 +7,7 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
 
 #include <array>
 #include <span>
@@ -24,7 +25,7 @@ public:
   }
 
   /// The key of the cell with corners v[0, corners) at index `index` of its type array.
-  uint64_t key(const uint32_t *v, int corners, const std::vector<Vec3f> &points, uint64_t index) const {
+  uint64_t key(const uint32_t *v, int corners, std::span<const Vec3f> points, uint64_t index) const {
     Vec3f sum{0.f, 0.f, 0.f};
     for (int i = 0; i < corners; ++i)
       sum = sum + points[v[i]];
@@ -56,8 +57,8 @@ private:
   Vec3f lower_, scale_;
 };
 
-/// Sorts the keys of one type array's cells; returns the new order (order[newIndex] = oldIndex), or an empty
-/// buffer when the cells are in that order already.
+/// The order of one type array's cells by their keys (order[newIndex] = oldIndex), or an empty buffer when
+/// the cells are in that order already. Leaves the keys in no useful order.
 Buffer<uint32_t> sortedOrder(Buffer<uint64_t> &keys);
 
 /// Item i of `items` becomes item order[i] of `source` (item i where `order` is empty: in order already), for
@@ -75,7 +76,68 @@ void gather(T *items, const T *source, size_t count, std::span<const uint32_t> o
 }
 
 /// Numbers the points by first use in the cells' order (points no cell uses keep their relative order at the
-/// end), so that a cell's corners lie close in memory; the cells, points and point fields follow.
-void numberPointsByFirstUse(Mesh &mesh);
+/// end), so that a cell's corners lie close in memory. The cells are renumbered as they are placed in their
+/// final order, type array by type array in the mesh's type order; the points and point fields follow last.
+class FirstUseNumbering {
+public:
+  explicit FirstUseNumbering(size_t pointCount) : newIndex_(pointCount, kUnused) {}
+
+  /// Cell i of `cells` becomes cell order[i] of `source` (cell i where `order` is empty: `source` may then be
+  /// `cells`), its corners renumbered, for `count` cells of `Corners` corners (a constant, as in gather).
+  /// Numbers go by first use, which is serial; so the second half of the cells is numbered on its own
+  /// meanwhile, from 0, and its numbers are then mapped to those that follow from the first half.
+  template <size_t Corners>
+  void place(uint32_t *cells, const uint32_t *source, size_t count, std::span<const uint32_t> order) {
+    const size_t half = count >= kSplitCells ? count / 2 : count;
+    std::vector<uint32_t> secondHalfIndex;
+    uint32_t secondHalfPoints = 0;
+    tbb::parallel_invoke(
+        [&] { next_ = number<Corners>(cells, source, order, 0, half, newIndex_.data(), next_); },
+        [&] {
+          if (half == count)
+            return;
+          secondHalfIndex.assign(newIndex_.size(), kUnused);
+          secondHalfPoints = number<Corners>(cells, source, order, half, count, secondHalfIndex.data(), 0);
+        });
+    if (half < count)
+      renumberAfterFirstHalf(cells + half * Corners, (count - half) * Corners, secondHalfIndex,
+                             secondHalfPoints);
+  }
+
+  /// Moves the points and point fields to their new numbers; once, after the last cells are placed.
+  void reorderPoints(Mesh &mesh);
+
+private:
+  static constexpr uint32_t kUnused = 0xffffffffu;
+  static constexpr size_t kSplitCells = size_t(1) << 16;
+
+  /// Places cells [begin, end), numbering points not in `newIndex` yet from `next` on; returns the next
+  /// number. The source cells of later places are prefetched, since the order jumps all over them.
+  template <size_t Corners>
+  static uint32_t number(uint32_t *cells, const uint32_t *source, std::span<const uint32_t> order,
+                         size_t begin, size_t end, uint32_t *newIndex, uint32_t next) {
+    constexpr size_t kPrefetchCells = 16;
+    for (size_t i = begin; i < end; ++i) {
+      if (i + kPrefetchCells < order.size())
+        __builtin_prefetch(source + size_t(order[i + kPrefetchCells]) * Corners);
+      const uint32_t *from = source + (order.empty() ? i : size_t(order[i])) * Corners;
+      for (size_t k = 0; k < Corners; ++k) {
+        uint32_t &index = newIndex[from[k]];
+        if (index == kUnused)
+          index = next++;
+        cells[i * Corners + k] = index;
+      }
+    }
+    return next;
+  }
+
+  /// Maps the `count` corner numbers of the second half, numbered on their own by `ownIndex` (`ownPoints`
+  /// points), to the numbers that go on from the first half's.
+  void renumberAfterFirstHalf(uint32_t *corners, size_t count, const std::vector<uint32_t> &ownIndex,
+                              uint32_t ownPoints);
+
+  std::vector<uint32_t> newIndex_;
+  uint32_t next_ = 0;
+};
 
 } // namespace uvr
