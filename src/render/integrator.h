@@ -33,7 +33,7 @@ struct SceneView {
   MeshView mesh;
   BvhView bvh;
   OccupancyView occupancy;                ///< used by the skipping modes
-  SeedGridView seeds;                     ///< where walks to far samples start
+  SeedGridView seeds;                     ///< where far walks start; boundary faces per voxel
   const uint32_t *tetNeighbors = nullptr; ///< 4 per tet; see buildTetNeighbors
   PartitionsView partitions;
   const float *nodeMaxOpacity = nullptr; ///< per KD node, the maximum over the partitions below
