@@ -97,9 +97,9 @@ TEST(BackendsAgree, CudaBuildsTheHostsAccelerationData) {
       expectSameTree(host, 0, device.partitions, 0);
       EXPECT_EQ(device.tetNeighbors, buildTetNeighbors(mesh));
       const OccupancyGrid grid = buildOccupancyGrid(view);
-      EXPECT_EQ(device.occupancy.nx, grid.nx);
-      EXPECT_EQ(device.occupancy.ny, grid.ny);
-      EXPECT_EQ(device.occupancy.nz, grid.nz);
+      EXPECT_EQ(device.occupancy.grid.nx, grid.grid.nx);
+      EXPECT_EQ(device.occupancy.grid.ny, grid.grid.ny);
+      EXPECT_EQ(device.occupancy.grid.nz, grid.grid.nz);
       EXPECT_EQ(device.occupancy.bits, grid.bits);
       const std::vector<uint32_t> neighbors = buildTetNeighbors(mesh);
       const SeedGrid seeds = buildSeedGrid(view, neighbors.data());

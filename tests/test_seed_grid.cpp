@@ -35,8 +35,9 @@ TEST(SeedGrid, SeedsEachVoxelWithTheLowestCellHoldingItsCentre) {
       *cells = std::move(kept);
     }
     const MeshView view = makeMeshView(mesh, -1);
-    const SeedGrid grid = buildSeedGrid(view, nullptr, 3.f);
-    ASSERT_EQ(grid.seeds.size(), grid.voxelCount());
+    const SeedGrid seeds = buildSeedGrid(view, nullptr, 3.f);
+    const VoxelGrid &grid = seeds.grid;
+    ASSERT_EQ(seeds.seeds.size(), grid.voxelCount());
     ASSERT_GT(grid.voxelCount(), view.cellCount());
     uint64_t seeded = 0, empty = 0;
     for (int z = 0; z < grid.nz; ++z)
@@ -51,8 +52,8 @@ TEST(SeedGrid, SeedsEachVoxelWithTheLowestCellHoldingItsCentre) {
               expected = uint32_t(c);
           const uint64_t voxel =
               (uint64_t(z) * uint64_t(grid.ny) + uint64_t(y)) * uint64_t(grid.nx) + uint64_t(x);
-          ASSERT_EQ(grid.seeds[voxel], expected) << "voxel " << x << " " << y << " " << z;
-          EXPECT_EQ(grid.view().seedAt(centre), expected);
+          ASSERT_EQ(seeds.seeds[voxel], expected) << "voxel " << x << " " << y << " " << z;
+          EXPECT_EQ(seeds.view().seedAt(centre), expected);
           (expected == kNoCell ? empty : seeded) += 1;
         }
     EXPECT_GT(seeded, 0u);
@@ -81,7 +82,7 @@ TEST(SeedGrid, BoundaryFacesTellPointsOutsideTheMesh) {
   const std::vector<uint32_t> neighbors = buildTetNeighbors(mesh);
   for (float voxelsPerCell : {0.1f, 0.5f, 2.f}) {
     const SeedGrid grid = buildSeedGrid(view, neighbors.data(), voxelsPerCell);
-    ASSERT_EQ(grid.boundaryStart.size(), grid.voxelCount() + 1);
+    ASSERT_EQ(grid.boundaryStart.size(), grid.grid.voxelCount() + 1);
     ASSERT_FALSE(grid.boundaryFaces.empty());
     const SeedGridView seeds = grid.view();
     std::mt19937 random(11);

@@ -3,6 +3,7 @@
 // failed walk and a failed BVH query. Flat arrays, usable on host and device.
 #pragma once
 
+#include "accel/voxel_grid.h"
 #include "core/host_device.h"
 #include "core/vec.h"
 #include "mesh/mesh_view.h"
@@ -14,34 +15,27 @@ namespace uvr {
 
 struct OccupancyView {
   const uint64_t *bits = nullptr; ///< null: every point may lie in a cell
-  Vec3f origin;
-  Vec3f voxelsPerUnit;
-  int nx = 0, ny = 0, nz = 0;
+  VoxelGrid grid;
 
   /// False only where no cell can hold `p`.
   UVR_HOST_DEVICE bool mayHoldCell(Vec3f p) const {
     if (!bits)
       return true;
-    const float fx = (p.x - origin.x) * voxelsPerUnit.x, fy = (p.y - origin.y) * voxelsPerUnit.y,
-                fz = (p.z - origin.z) * voxelsPerUnit.z;
-    if (!(fx >= 0.f && fy >= 0.f && fz >= 0.f)) // also rejects NaN
+    int x, y, z;
+    if (!grid.voxelOf(p, x, y, z))
       return false;
-    const int x = int(fx), y = int(fy), z = int(fz);
-    if (x >= nx || y >= ny || z >= nz)
-      return false;
-    const uint64_t voxel = (uint64_t(z) * uint64_t(ny) + uint64_t(y)) * uint64_t(nx) + uint64_t(x);
+    const uint64_t voxel = grid.index(x, y, z);
     return (bits[voxel >> 6] >> (voxel & 63)) & 1u;
   }
+  UVR_HOST_DEVICE uint64_t wordCount() const { return (grid.voxelCount() + 63) / 64; }
 };
 
 struct OccupancyGrid {
   std::vector<uint64_t> bits;
-  Vec3f origin, voxelsPerUnit;
-  Vec3f voxelSize; ///< the extent over the voxel count, per axis
-  int nx = 0, ny = 0, nz = 0;
+  VoxelGrid grid;
 
-  OccupancyView view() const { return {bits.data(), origin, voxelsPerUnit, nx, ny, nz}; }
-  uint64_t wordCount() const { return (uint64_t(nx) * uint64_t(ny) * uint64_t(nz) + 63) / 64; }
+  OccupancyView view() const { return {bits.data(), grid}; }
+  uint64_t wordCount() const { return view().wordCount(); }
   size_t memoryBytes() const { return bits.size() * sizeof(uint64_t); }
 };
 

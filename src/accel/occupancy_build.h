@@ -17,9 +17,6 @@
 
 namespace uvr {
 
-/// The grid's placement and shape for a mesh of `cells` cells within `bounds`; no bits allocated.
-OccupancyGrid occupancyShape(const Box3f &bounds, uint64_t cells, float voxelsPerCell);
-
 // The four outward face planes of a tet, to tell voxels that cannot touch it.
 struct TetPlanes {
   Vec3f normal[4];
@@ -134,10 +131,9 @@ UVR_HOST_DEVICE void markTet(const TetPlanes &planes, const VoxelRange &range, V
 }
 
 /// Calls `setWord(index, mask)` for the bits of `grid` that cell `c` may reach: the voxels its box touches,
-/// less those wholly beyond a face plane of a tet. `voxelSize` is OccupancyGrid::voxelSize.
+/// less those wholly beyond a face plane of a tet.
 template <typename SetWord>
-UVR_HOST_DEVICE void markCell(const MeshView &mesh, uint64_t c, const OccupancyView &grid, Vec3f voxelSize,
-                              SetWord &&setWord) {
+UVR_HOST_DEVICE void markCell(const MeshView &mesh, uint64_t c, const VoxelGrid &grid, SetWord &&setWord) {
   auto setRow = [&](int y, int z, int first, int last) {
     const uint64_t row = (uint64_t(z) * uint64_t(grid.ny) + uint64_t(y)) * uint64_t(grid.nx);
     const uint64_t begin = row + uint64_t(first), end = row + uint64_t(last);
@@ -158,7 +154,7 @@ UVR_HOST_DEVICE void markCell(const MeshView &mesh, uint64_t c, const OccupancyV
   // A tet fills a sixth of its box or less: voxels wholly beyond one of its face planes stay clear.
   TetPlanes planes;
   if (c < mesh.tetCount && planes.set(mesh, c)) {
-    markTet(planes, range, grid.origin, voxelSize, setRow);
+    markTet(planes, range, grid.origin, grid.voxelSize, setRow);
     return;
   }
   for (int z = range.z0; z <= range.z1; ++z)

@@ -9,6 +9,7 @@
 // "outside" at the cost of a few triangle tests. Flat arrays, usable on host and device.
 #pragma once
 
+#include "accel/voxel_grid.h"
 #include "core/host_device.h"
 #include "core/vec.h"
 #include "mesh/cell.h"
@@ -59,36 +60,12 @@ struct SeedGridView {
   /// with other cells than tets).
   const uint32_t *boundaryStart = nullptr;
   const uint32_t *boundaryFaces = nullptr; ///< 4 * tet + i, face i being the one opposite corner i
-  Vec3f origin;
-  Vec3f voxelsPerUnit;
-  Vec3f voxelSize; ///< the extent over the voxel count, per axis
-  int nx = 0, ny = 0, nz = 0;
-
-  UVR_HOST_DEVICE float voxelEdge() const { return maxf(voxelSize.x, maxf(voxelSize.y, voxelSize.z)); }
-
-  /// The voxel holding `p`; false outside the grid, and without one.
-  UVR_HOST_DEVICE bool voxelOf(Vec3f p, int &x, int &y, int &z) const {
-    if (!seeds)
-      return false;
-    const float fx = (p.x - origin.x) * voxelsPerUnit.x, fy = (p.y - origin.y) * voxelsPerUnit.y,
-                fz = (p.z - origin.z) * voxelsPerUnit.z;
-    if (!(fx >= 0.f && fy >= 0.f && fz >= 0.f)) // also rejects NaN
-      return false;
-    x = int(fx), y = int(fy), z = int(fz);
-    return x < nx && y < ny && z < nz;
-  }
-  UVR_HOST_DEVICE uint64_t index(int x, int y, int z) const {
-    return (uint64_t(z) * uint64_t(ny) + uint64_t(y)) * uint64_t(nx) + uint64_t(x);
-  }
-  UVR_HOST_DEVICE Vec3f centre(int x, int y, int z) const {
-    return {origin.x + (float(x) + 0.5f) * voxelSize.x, origin.y + (float(y) + 0.5f) * voxelSize.y,
-            origin.z + (float(z) + 0.5f) * voxelSize.z};
-  }
+  VoxelGrid grid;
 
   /// The seed of the voxel holding `p`, or kNoCell (also outside the grid, and without a grid).
   UVR_HOST_DEVICE uint32_t seedAt(Vec3f p) const {
     int x, y, z;
-    return voxelOf(p, x, y, z) ? seeds[index(x, y, z)] : kNoCell;
+    return seeds && grid.voxelOf(p, x, y, z) ? seeds[grid.index(x, y, z)] : kNoCell;
   }
 
   /// True only where `p` lies in no cell of `mesh`: its voxel's centre is inside exactly when it has a seed,
@@ -96,11 +73,11 @@ struct SeedGridView {
   /// known (no face lists, outside the grid, a crossing too close to call).
   UVR_HOST_DEVICE bool outsideMesh(const MeshView &mesh, Vec3f p) const {
     int x, y, z;
-    if (!boundaryStart || !voxelOf(p, x, y, z))
+    if (!boundaryStart || !grid.voxelOf(p, x, y, z))
       return false;
-    const uint64_t voxel = index(x, y, z);
-    const Vec3f from = centre(x, y, z);
-    const float tolerance = 1e-4f * voxelEdge();
+    const uint64_t voxel = grid.index(x, y, z);
+    const Vec3f from = grid.centre(x, y, z);
+    const float tolerance = 1e-4f * grid.voxelEdge();
     bool inside = seeds[voxel] != kNoCell;
     for (uint32_t i = boundaryStart[voxel]; i < boundaryStart[voxel + 1]; ++i) {
       Vec3f a, b, c;
@@ -117,22 +94,11 @@ struct SeedGridView {
 struct SeedGrid {
   std::vector<uint32_t> seeds;
   std::vector<uint32_t> boundaryStart, boundaryFaces; ///< empty where not listed
-  Vec3f origin, voxelsPerUnit;
-  Vec3f voxelSize; ///< the extent over the voxel count, per axis
-  int nx = 0, ny = 0, nz = 0;
+  VoxelGrid grid;
 
   SeedGridView view() const {
-    return {seeds.data(),
-            boundaryStart.empty() ? nullptr : boundaryStart.data(),
-            boundaryFaces.data(),
-            origin,
-            voxelsPerUnit,
-            voxelSize,
-            nx,
-            ny,
-            nz};
+    return {seeds.data(), boundaryStart.empty() ? nullptr : boundaryStart.data(), boundaryFaces.data(), grid};
   }
-  uint64_t voxelCount() const { return uint64_t(nx) * uint64_t(ny) * uint64_t(nz); }
   size_t memoryBytes() const {
     return (seeds.size() + boundaryStart.size() + boundaryFaces.size()) * sizeof(uint32_t);
   }
@@ -148,9 +114,6 @@ constexpr float kDefaultSeedVoxelsPerCell = 0.5f;
 SeedGrid buildSeedGrid(const MeshView &mesh, const uint32_t *tetNeighbors,
                        float voxelsPerCell = kDefaultSeedVoxelsPerCell);
 
-/// The grid's placement and shape for a mesh of `cells` cells within `bounds`; no seeds allocated.
-SeedGrid seedGridShape(const Box3f &bounds, uint64_t cells, float voxelsPerCell);
-
 /// Whether the grid lists boundary faces for `mesh`: tets alone, few enough to number their faces in 32 bits.
 UVR_HOST_DEVICE inline bool listsBoundaryFaces(const MeshView &mesh) {
   return mesh.cellCount() == mesh.tetCount && mesh.tetCount <= (uint64_t(1) << 30);
@@ -159,7 +122,7 @@ UVR_HOST_DEVICE inline bool listsBoundaryFaces(const MeshView &mesh) {
 /// Calls `visit(x, y, z)` for the voxels of `grid` that `span` picks along each axis for `box`:
 /// `span(lo, hi, first, last)` takes the box's extent in voxel units and gives an index range, clamped here.
 template <typename Span, typename Visit>
-UVR_HOST_DEVICE void forEachVoxelIn(const SeedGridView &grid, const Box3f &box, Span &&span, Visit &&visit) {
+UVR_HOST_DEVICE void forEachVoxelIn(const VoxelGrid &grid, const Box3f &box, Span &&span, Visit &&visit) {
   const int count[3] = {grid.nx, grid.ny, grid.nz};
   int first[3], last[3];
   for (int a = 0; a < 3; ++a) {
@@ -176,7 +139,7 @@ UVR_HOST_DEVICE void forEachVoxelIn(const SeedGridView &grid, const Box3f &box, 
 
 /// Calls `offer(voxel)` for each voxel of `grid` whose centre lies in cell `c`.
 template <typename Offer>
-UVR_HOST_DEVICE void forEachSeededVoxel(const MeshView &mesh, uint64_t c, const SeedGridView &grid,
+UVR_HOST_DEVICE void forEachSeededVoxel(const MeshView &mesh, uint64_t c, const VoxelGrid &grid,
                                         Offer &&offer) {
   // Voxel i's centre is at i + 1/2 in voxel units: the indices whose centres lie within the box, with a
   // hundredth of a voxel's slack against rounding (the test is exact).
@@ -193,7 +156,7 @@ UVR_HOST_DEVICE void forEachSeededVoxel(const MeshView &mesh, uint64_t c, const 
 /// Calls `offer(voxel)` for each voxel of `grid` that the box of boundary face `face` (4 * tet + i) reaches,
 /// the box widened by a hundredth of a voxel so that rounding never leaves out a voxel it touches.
 template <typename Offer>
-UVR_HOST_DEVICE void forEachBoundaryVoxel(const MeshView &mesh, uint32_t face, const SeedGridView &grid,
+UVR_HOST_DEVICE void forEachBoundaryVoxel(const MeshView &mesh, uint32_t face, const VoxelGrid &grid,
                                           Offer &&offer) {
   Vec3f a, b, c;
   tetFaceCorners(mesh, face, a, b, c);

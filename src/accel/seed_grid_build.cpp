@@ -1,4 +1,3 @@
-#include "accel/occupancy_build.h"
 #include "accel/seed_grid.h"
 #include "core/parallel_bounds.h"
 
@@ -10,32 +9,19 @@
 
 namespace uvr {
 
-SeedGrid seedGridShape(const Box3f &bounds, uint64_t cells, float voxelsPerCell) {
-  const OccupancyGrid shape = occupancyShape(bounds, cells, voxelsPerCell); // placed as the occupancy grid
-  SeedGrid grid;
-  grid.origin = shape.origin;
-  grid.voxelsPerUnit = shape.voxelsPerUnit;
-  grid.voxelSize = shape.voxelSize;
-  grid.nx = shape.nx;
-  grid.ny = shape.ny;
-  grid.nz = shape.nz;
-  return grid;
-}
-
 namespace {
 
 /// Compressed rows of the boundary faces per voxel: counted, offset by a scan, then filled.
 void listBoundaryFaces(const MeshView &mesh, const uint32_t *tetNeighbors, SeedGrid &grid) {
-  const SeedGridView view = grid.view();
   auto forEachBoundaryFace = [&](auto &&visit) {
     tbb::parallel_for(uint64_t(0), mesh.tetCount, [&](uint64_t t) {
       for (uint32_t i = 0; i < 4; ++i)
         if (tetNeighbors[4 * t + i] == kNoCell)
-          forEachBoundaryVoxel(mesh, uint32_t(4 * t + i), view,
+          forEachBoundaryVoxel(mesh, uint32_t(4 * t + i), grid.grid,
                                [&](uint64_t voxel) { visit(voxel, 4 * t + i); });
     });
   };
-  std::vector<uint32_t> counts(grid.voxelCount(), 0);
+  std::vector<uint32_t> counts(grid.grid.voxelCount(), 0);
   forEachBoundaryFace([&](uint64_t voxel, uint64_t) {
     std::atomic_ref<uint32_t>(counts[voxel]).fetch_add(1, std::memory_order_relaxed);
   });
@@ -63,12 +49,12 @@ SeedGrid buildSeedGrid(const MeshView &mesh, const uint32_t *tetNeighbors, float
   const uint64_t cells = mesh.cellCount();
   if (cells == 0)
     return {};
-  SeedGrid grid = seedGridShape(parallelBounds(cells, [&](uint64_t c) { return cellBounds(mesh, c); }), cells,
-                                voxelsPerCell);
-  grid.seeds.assign(grid.voxelCount(), kNoCell);
-  const SeedGridView view = grid.view();
+  SeedGrid grid;
+  grid.grid = placeVoxelGrid(parallelBounds(cells, [&](uint64_t c) { return cellBounds(mesh, c); }), cells,
+                             voxelsPerCell);
+  grid.seeds.assign(grid.grid.voxelCount(), kNoCell);
   tbb::parallel_for(uint64_t(0), cells, [&](uint64_t c) {
-    forEachSeededVoxel(mesh, c, view, [&](uint64_t voxel) {
+    forEachSeededVoxel(mesh, c, grid.grid, [&](uint64_t voxel) {
       // A centre on a shared face lies in several cells: the lowest-numbered one wins.
       std::atomic_ref<uint32_t> seed(grid.seeds[voxel]);
       uint32_t current = seed.load(std::memory_order_relaxed);

@@ -139,8 +139,8 @@ UVR_HOST_DEVICE inline RayResult integrateRay(const SceneView &scene, const Inte
     // overlap nor leave gaps at partition boundaries (with step s1 nothing changes).
     const float kEnd = gridIndex(tb);
     const float stride = step / s1;
-    const int walkSteps = 8 * int(ceilf(stride));    // a longer step crosses proportionally more tets
-    const bool far = step > scene.seeds.voxelEdge(); // the seed lies nearer than the previous sample
+    const int walkSteps = 8 * int(ceilf(stride));         // a longer step crosses proportionally more tets
+    const bool far = step > scene.seeds.grid.voxelEdge(); // the seed lies nearer than the previous sample
     for (float t = tEnter + k * s1; t < tb; k += stride, t = tEnter + k * s1) {
       ++result.samples;
       float value;

@@ -133,12 +133,11 @@ __global__ void tetNeighborsKernel(const uint32_t *tets, uint64_t tetCount, cons
 
 // ---- Occupancy grid
 
-__global__ void occupancyKernel(MeshView mesh, uint64_t cells, OccupancyView grid, Vec3f voxelSize,
-                                unsigned long long *bits) {
+__global__ void occupancyKernel(MeshView mesh, uint64_t cells, VoxelGrid grid, unsigned long long *bits) {
   const uint64_t c = globalIndex();
   if (c >= cells)
     return;
-  markCell(mesh, c, grid, voxelSize, [&](uint64_t w, uint64_t mask) {
+  markCell(mesh, c, grid, [&](uint64_t w, uint64_t mask) {
     if ((bits[w] & mask) != mask)
       atomicOr(bits + w, (unsigned long long)mask);
   });
@@ -146,7 +145,7 @@ __global__ void occupancyKernel(MeshView mesh, uint64_t cells, OccupancyView gri
 
 // ---- Seed grid
 
-__global__ void seedKernel(MeshView mesh, uint64_t cells, SeedGridView grid, uint32_t *seeds) {
+__global__ void seedKernel(MeshView mesh, uint64_t cells, VoxelGrid grid, uint32_t *seeds) {
   const uint64_t c = globalIndex();
   if (c >= cells)
     return;
@@ -155,7 +154,7 @@ __global__ void seedKernel(MeshView mesh, uint64_t cells, SeedGridView grid, uin
 
 /// Per boundary face of the tets, per voxel its box reaches: counts the face there (`faces` null), or puts it
 /// in the voxel's next free slot (`slots`, advanced; the row's order is arbitrary).
-__global__ void boundaryFacesKernel(MeshView mesh, const uint32_t *tetNeighbors, SeedGridView grid,
+__global__ void boundaryFacesKernel(MeshView mesh, const uint32_t *tetNeighbors, VoxelGrid grid,
                                     uint32_t *slots, uint32_t *faces) {
   const uint64_t entry = globalIndex();
   if (entry >= 4 * mesh.tetCount || tetNeighbors[entry] != kNoCell)
@@ -559,24 +558,21 @@ private:
   }
 
   void occupancy() {
-    const OccupancyGrid shape = occupancyShape(meshBounds_, cells_, kDefaultVoxelsPerCell);
-    out_.occupancyBits.resize(shape.wordCount());
+    OccupancyView &view = out_.occupancy;
+    view.grid = placeVoxelGrid(meshBounds_, cells_, kDefaultVoxelsPerCell);
+    out_.occupancyBits.resize(view.wordCount());
     UVR_CUDA_CHECK(cudaMemset(out_.occupancyBits.data(), 0, out_.occupancyBits.bytes()));
-    out_.occupancy = shape.view();
-    out_.occupancy.bits = out_.occupancyBits.data();
-    out_.voxelSize = shape.voxelSize;
+    view.bits = out_.occupancyBits.data();
     occupancyKernel<<<cellBlocks(), kBlock>>>(
-        mesh_, cells_, out_.occupancy, shape.voxelSize,
-        reinterpret_cast<unsigned long long *>(out_.occupancyBits.data()));
+        mesh_, cells_, view.grid, reinterpret_cast<unsigned long long *>(out_.occupancyBits.data()));
   }
 
   void seeds() {
-    const SeedGrid shape = seedGridShape(meshBounds_, cells_, kDefaultSeedVoxelsPerCell);
-    out_.seedCells.resize(shape.voxelCount());
+    out_.seeds.grid = placeVoxelGrid(meshBounds_, cells_, kDefaultSeedVoxelsPerCell);
+    out_.seedCells.resize(out_.seeds.grid.voxelCount());
     UVR_CUDA_CHECK(cudaMemset(out_.seedCells.data(), 0xff, out_.seedCells.bytes())); // kNoCell
-    out_.seeds = shape.view();
     out_.seeds.seeds = out_.seedCells.data();
-    seedKernel<<<cellBlocks(), kBlock>>>(mesh_, cells_, out_.seeds, out_.seedCells.data());
+    seedKernel<<<cellBlocks(), kBlock>>>(mesh_, cells_, out_.seeds.grid, out_.seedCells.data());
     if (listsBoundaryFaces(mesh_))
       boundaryFaces();
   }
@@ -588,8 +584,8 @@ private:
     DeviceBuffer<uint32_t> slots;
     slots.resize(voxels + 1);
     UVR_CUDA_CHECK(cudaMemset(slots.data(), 0, slots.bytes()));
-    boundaryFacesKernel<<<blocksFor(entries, kBlock), kBlock>>>(mesh_, out_.tetNeighbors.data(), out_.seeds,
-                                                                slots.data(), nullptr);
+    boundaryFacesKernel<<<blocksFor(entries, kBlock), kBlock>>>(mesh_, out_.tetNeighbors.data(),
+                                                                out_.seeds.grid, slots.data(), nullptr);
     UVR_CUDA_CHECK(cudaGetLastError());
     // Summed in 64 bits: past 2^32 - 1 entries the rows cannot be numbered, and the grid lists none.
     DeviceBuffer<unsigned long long> total;
@@ -607,8 +603,8 @@ private:
     out_.boundaryFaces.resize(downloadOne(out_.boundaryStart.data() + voxels));
     UVR_CUDA_CHECK(
         cudaMemcpy(slots.data(), out_.boundaryStart.data(), slots.bytes(), cudaMemcpyDeviceToDevice));
-    boundaryFacesKernel<<<blocksFor(entries, kBlock), kBlock>>>(mesh_, out_.tetNeighbors.data(), out_.seeds,
-                                                                slots.data(), out_.boundaryFaces.data());
+    boundaryFacesKernel<<<blocksFor(entries, kBlock), kBlock>>>(
+        mesh_, out_.tetNeighbors.data(), out_.seeds.grid, slots.data(), out_.boundaryFaces.data());
     out_.seeds.boundaryStart = out_.boundaryStart.data();
     out_.seeds.boundaryFaces = out_.boundaryFaces.data();
   }

@@ -26,7 +26,6 @@ struct DeviceAcceleration {
   DeviceBuffer<uint32_t> bvhCellIds;
   DeviceBuffer<uint64_t> occupancyBits;
   OccupancyView occupancy; ///< device pointer to occupancyBits
-  Vec3f voxelSize;
   DeviceBuffer<uint32_t> seedCells;
   DeviceBuffer<uint32_t> boundaryStart, boundaryFaces; ///< empty where not listed
   SeedGridView seeds;                                  ///< device pointers to the three
