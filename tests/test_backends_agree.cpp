@@ -104,15 +104,18 @@ TEST(BackendsAgree, CudaBuildsTheHostsAccelerationData) {
       const std::vector<uint32_t> neighbors = buildTetNeighbors(mesh);
       const SeedGrid seeds = buildSeedGrid(view, neighbors.data());
       EXPECT_EQ(device.seeds.seeds, seeds.seeds);
-      // The same faces per voxel, in whatever order the atomics filled them.
+      // The same faces per voxel with the same octants, in whatever order the atomics filled them.
       ASSERT_EQ(device.seeds.boundaryStart, seeds.boundaryStart);
-      std::vector<uint32_t> deviceFaces = device.seeds.boundaryFaces, hostFaces = seeds.boundaryFaces;
-      for (size_t v = 0; v + 1 < seeds.boundaryStart.size(); ++v) {
-        const auto first = long(seeds.boundaryStart[v]), last = long(seeds.boundaryStart[v + 1]);
-        std::sort(deviceFaces.begin() + first, deviceFaces.begin() + last);
-        std::sort(hostFaces.begin() + first, hostFaces.begin() + last);
-      }
-      EXPECT_EQ(deviceFaces, hostFaces);
+      auto rows = [](const SeedGrid &grid) {
+        std::vector<std::pair<uint32_t, uint8_t>> entries(grid.boundaryFaces.size());
+        for (size_t i = 0; i < entries.size(); ++i)
+          entries[i] = {grid.boundaryFaces[i], grid.boundaryOctants[i]};
+        for (size_t v = 0; v + 1 < grid.boundaryStart.size(); ++v)
+          std::sort(entries.begin() + long(grid.boundaryStart[v]),
+                    entries.begin() + long(grid.boundaryStart[v + 1]));
+        return entries;
+      };
+      EXPECT_EQ(rows(device.seeds), rows(seeds));
       EXPECT_EQ(seeds.boundaryFaces.empty(), type != CellType::Tetra);
       expectValidBvh(view, device.bvh);
     }

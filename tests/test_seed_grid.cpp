@@ -7,6 +7,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <random>
 #include <utility>
 #include <vector>
@@ -59,6 +61,44 @@ TEST(SeedGrid, SeedsEachVoxelWithTheLowestCellHoldingItsCentre) {
     EXPECT_GT(seeded, 0u);
     EXPECT_GT(empty, 0u) << "the cut should leave some centres outside";
   }
+}
+
+// The separating-axis test against a dense sampling of each triangle: true wherever a sample lies in the box
+// (conservative), and only where one lies within a sample spacing of it (tight: a test of the box's axes
+// alone would pass triangles that only their bounding box brings near).
+TEST(SeedGrid, TriangleMeetsBoxExactly) {
+  std::mt19937 random(5);
+  std::uniform_real_distribution<float> corner(-2.f, 2.f);
+  const Vec3f centre{0.1f, -0.2f, 0.3f}, half{0.5f, 0.7f, 0.4f};
+  constexpr int kSteps = 60;
+  int met = 0, missedByBoxes = 0;
+  for (int k = 0; k < 3000; ++k) {
+    const Vec3f a{corner(random), corner(random), corner(random)},
+        b{corner(random), corner(random), corner(random)}, c{corner(random), corner(random), corner(random)};
+    const float spacing = std::max({length(b - a), length(c - a), length(c - b)}) / kSteps;
+    bool sampleInside = false, sampleNear = false;
+    for (int i = 0; i <= kSteps; ++i)
+      for (int j = 0; i + j <= kSteps; ++j) {
+        const Vec3f q = a + (b - a) * (float(i) / kSteps) + (c - a) * (float(j) / kSteps) - centre;
+        const Vec3f excess{std::fabs(q.x) - half.x, std::fabs(q.y) - half.y, std::fabs(q.z) - half.z};
+        sampleInside |= excess.x <= 0.f && excess.y <= 0.f && excess.z <= 0.f;
+        sampleNear |= excess.x <= spacing && excess.y <= spacing && excess.z <= spacing;
+      }
+    const bool meets = triangleMeetsBox(a, b, c, centre, half);
+    if (sampleInside)
+      ASSERT_TRUE(meets) << k;
+    if (meets)
+      ASSERT_TRUE(sampleNear) << k;
+    Box3f box;
+    box.extend(a);
+    box.extend(b);
+    box.extend(c);
+    const bool boxesMeet = !intersection(box, Box3f{centre - half, centre + half}).empty();
+    met += meets;
+    missedByBoxes += boxesMeet && !meets;
+  }
+  EXPECT_GT(met, 300);
+  EXPECT_GT(missedByBoxes, 100) << "the triangles' boxes alone decide too many";
 }
 
 // The boundary faces' parity never calls a point in a cell outside, and calls most points outside the cells

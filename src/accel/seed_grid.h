@@ -1,6 +1,7 @@
 // Where point location starts for a sample far from the last one, and which samples lie provably outside the
 // mesh. Per voxel of a coarse grid over the mesh bounds: a seed, a cell holding the voxel's centre; and, for
-// tet meshes, the boundary faces (tet faces with no neighbour) that reach into the voxel.
+// tet meshes, the boundary faces (tet faces with no neighbour) that meet the voxel, each with the octants of
+// the voxel it meets.
 //
 // A walk from the previous sample's cell crosses every cell in between, so with steps of many cells (adaptive
 // sampling) it would cost as much as the samples it saves; from the seed it crosses a cell or two. And a
@@ -54,12 +55,18 @@ UVR_HOST_DEVICE inline void tetFaceCorners(const MeshView &mesh, uint32_t face, 
   c = mesh.points[v[(i + 3) & 3u]];
 }
 
+/// The bit of the octant around `centre` that holds `p`: 1 << (x + 2y + 4z), x being 1 on the upper side.
+UVR_HOST_DEVICE inline uint32_t octantBit(Vec3f centre, Vec3f p) {
+  return 1u << ((p.x >= centre.x ? 1 : 0) + (p.y >= centre.y ? 2 : 0) + (p.z >= centre.z ? 4 : 0));
+}
+
 struct SeedGridView {
   const uint32_t *seeds = nullptr; ///< per voxel, x fastest; kNoCell where no cell holds the centre
   /// Per voxel and one more, where its faces begin in `boundaryFaces`; null where they are not listed (meshes
   /// with other cells than tets).
   const uint32_t *boundaryStart = nullptr;
-  const uint32_t *boundaryFaces = nullptr; ///< 4 * tet + i, face i being the one opposite corner i
+  const uint32_t *boundaryFaces = nullptr;  ///< 4 * tet + i, face i being the one opposite corner i
+  const uint8_t *boundaryOctants = nullptr; ///< per listed face, a bit per octant of the voxel it meets
   VoxelGrid grid;
 
   /// The seed of the voxel holding `p`, or kNoCell (also outside the grid, and without a grid).
@@ -69,8 +76,9 @@ struct SeedGridView {
   }
 
   /// True only where `p` lies in no cell of `mesh`: its voxel's centre is inside exactly when it has a seed,
-  /// and each boundary face that the segment from there to `p` crosses flips that. False where that is not
-  /// known (no face lists, outside the grid, a crossing too close to call).
+  /// and each boundary face that the segment from there to `p` crosses flips that. The segment lies in the
+  /// octant of the voxel that holds `p`, so only the faces meeting that octant are tested. False where that
+  /// is not known (no face lists, outside the grid, a crossing too close to call).
   UVR_HOST_DEVICE bool outsideMesh(const MeshView &mesh, Vec3f p) const {
     int x, y, z;
     if (!boundaryStart || !grid.voxelOf(p, x, y, z))
@@ -78,8 +86,11 @@ struct SeedGridView {
     const uint64_t voxel = grid.index(x, y, z);
     const Vec3f from = grid.centre(x, y, z);
     const float tolerance = 1e-4f * grid.voxelEdge();
+    const uint32_t octant = octantBit(from, p);
     bool inside = seeds[voxel] != kNoCell;
     for (uint32_t i = boundaryStart[voxel]; i < boundaryStart[voxel + 1]; ++i) {
+      if (!(boundaryOctants[i] & octant))
+        continue;
       Vec3f a, b, c;
       tetFaceCorners(mesh, boundaryFaces[i], a, b, c);
       const int crossing = segmentCrossesTriangle(from, p, a, b, c, tolerance);
@@ -94,17 +105,21 @@ struct SeedGridView {
 struct SeedGrid {
   std::vector<uint32_t> seeds;
   std::vector<uint32_t> boundaryStart, boundaryFaces; ///< empty where not listed
+  std::vector<uint8_t> boundaryOctants;               ///< one per listed face
   VoxelGrid grid;
 
   SeedGridView view() const {
-    return {seeds.data(), boundaryStart.empty() ? nullptr : boundaryStart.data(), boundaryFaces.data(), grid};
+    return {seeds.data(), boundaryStart.empty() ? nullptr : boundaryStart.data(), boundaryFaces.data(),
+            boundaryOctants.data(), grid};
   }
   size_t memoryBytes() const {
-    return (seeds.size() + boundaryStart.size() + boundaryFaces.size()) * sizeof(uint32_t);
+    return (seeds.size() + boundaryStart.size() + boundaryFaces.size()) * sizeof(uint32_t) +
+           boundaryOctants.size();
   }
 };
 
-/// About `voxelsPerCell` voxels per cell over the mesh bounds, 4 bytes each and 4 more for the face lists.
+/// About `voxelsPerCell` voxels per cell over the mesh bounds, 4 bytes each and 4 more for the face lists,
+/// whose entries take 5 bytes.
 /// The default keeps a walk from a seed to a few cells on the brain meshes, whose cells fill about half their
 /// bounds.
 constexpr float kDefaultSeedVoxelsPerCell = 0.5f;
@@ -153,8 +168,33 @@ UVR_HOST_DEVICE void forEachSeededVoxel(const MeshView &mesh, uint64_t c, const 
   });
 }
 
-/// Calls `offer(voxel)` for each voxel of `grid` that the box of boundary face `face` (4 * tet + i) reaches,
-/// the box widened by a hundredth of a voxel so that rounding never leaves out a voxel it touches.
+/// Whether triangle abc meets the box of centre `centre` and half extent `half`: no separating axis among
+/// the box's three, the triangle's normal and the nine crossings of an edge with a box axis.
+UVR_HOST_DEVICE inline bool triangleMeetsBox(Vec3f a, Vec3f b, Vec3f c, Vec3f centre, Vec3f half) {
+  const Vec3f v[3] = {a - centre, b - centre, c - centre};
+  // Separated along `axis` when the triangle's projection lies beyond the box's radius there.
+  auto separatedAlong = [&](Vec3f axis) {
+    const float p0 = dot(axis, v[0]), p1 = dot(axis, v[1]), p2 = dot(axis, v[2]);
+    const float radius = half.x * fabsf(axis.x) + half.y * fabsf(axis.y) + half.z * fabsf(axis.z);
+    return minf(p0, minf(p1, p2)) > radius || maxf(p0, maxf(p1, p2)) < -radius;
+  };
+  const Vec3f boxAxes[3] = {{1.f, 0.f, 0.f}, {0.f, 1.f, 0.f}, {0.f, 0.f, 1.f}};
+  const Vec3f edges[3] = {v[1] - v[0], v[2] - v[1], v[0] - v[2]};
+  for (const Vec3f &axis : boxAxes)
+    if (separatedAlong(axis))
+      return false;
+  if (separatedAlong(cross(edges[0], edges[1])))
+    return false;
+  for (const Vec3f &edge : edges)
+    for (const Vec3f &axis : boxAxes)
+      if (separatedAlong(cross(edge, axis)))
+        return false;
+  return true;
+}
+
+/// Calls `offer(voxel, octants)` for each voxel of `grid` that boundary face `face` (4 * tet + i) meets, with
+/// a bit per octant of the voxel it meets (see octantBit). Octants are widened by a hundredth of a voxel, so
+/// that rounding never leaves out one the face touches.
 template <typename Offer>
 UVR_HOST_DEVICE void forEachBoundaryVoxel(const MeshView &mesh, uint32_t face, const VoxelGrid &grid,
                                           Offer &&offer) {
@@ -168,7 +208,20 @@ UVR_HOST_DEVICE void forEachBoundaryVoxel(const MeshView &mesh, uint32_t face, c
     first = int(floorf(lo - 0.01f));
     last = int(floorf(hi + 0.01f));
   };
-  forEachVoxelIn(grid, box, voxelsReached, [&](int x, int y, int z) { offer(grid.index(x, y, z)); });
+  const Vec3f quarter = grid.voxelSize * 0.25f, half = grid.voxelSize * 0.26f;
+  forEachVoxelIn(grid, box, voxelsReached, [&](int x, int y, int z) {
+    const Vec3f centre = grid.centre(x, y, z);
+    uint32_t octants = 0;
+    for (uint32_t o = 0; o < 8; ++o) {
+      const Vec3f octantCentre = {centre.x + ((o & 1u) ? quarter.x : -quarter.x),
+                                  centre.y + ((o & 2u) ? quarter.y : -quarter.y),
+                                  centre.z + ((o & 4u) ? quarter.z : -quarter.z)};
+      if (triangleMeetsBox(a, b, c, octantCentre, half))
+        octants |= 1u << o;
+    }
+    if (octants)
+      offer(grid.index(x, y, z), octants);
+  });
 }
 
 } // namespace uvr

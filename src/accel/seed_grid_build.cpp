@@ -18,11 +18,11 @@ void listBoundaryFaces(const MeshView &mesh, const uint32_t *tetNeighbors, SeedG
       for (uint32_t i = 0; i < 4; ++i)
         if (tetNeighbors[4 * t + i] == kNoCell)
           forEachBoundaryVoxel(mesh, uint32_t(4 * t + i), grid.grid,
-                               [&](uint64_t voxel) { visit(voxel, 4 * t + i); });
+                               [&](uint64_t voxel, uint32_t octants) { visit(voxel, 4 * t + i, octants); });
     });
   };
   std::vector<uint32_t> counts(grid.grid.voxelCount(), 0);
-  forEachBoundaryFace([&](uint64_t voxel, uint64_t) {
+  forEachBoundaryFace([&](uint64_t voxel, uint64_t, uint32_t) {
     std::atomic_ref<uint32_t>(counts[voxel]).fetch_add(1, std::memory_order_relaxed);
   });
   std::vector<uint32_t> start(counts.size() + 1);
@@ -35,12 +35,16 @@ void listBoundaryFaces(const MeshView &mesh, const uint32_t *tetNeighbors, SeedG
   }
   start.back() = uint32_t(total);
   std::vector<uint32_t> faces(total);
+  std::vector<uint8_t> octants(total);
   std::copy(start.begin(), start.end() - 1, counts.begin()); // each voxel's next free slot
-  forEachBoundaryFace([&](uint64_t voxel, uint64_t face) {
-    faces[std::atomic_ref<uint32_t>(counts[voxel]).fetch_add(1, std::memory_order_relaxed)] = uint32_t(face);
+  forEachBoundaryFace([&](uint64_t voxel, uint64_t face, uint32_t faceOctants) {
+    const uint32_t slot = std::atomic_ref<uint32_t>(counts[voxel]).fetch_add(1, std::memory_order_relaxed);
+    faces[slot] = uint32_t(face);
+    octants[slot] = uint8_t(faceOctants);
   });
   grid.boundaryStart = std::move(start);
   grid.boundaryFaces = std::move(faces);
+  grid.boundaryOctants = std::move(octants);
 }
 
 } // namespace

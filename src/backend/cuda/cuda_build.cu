@@ -152,17 +152,19 @@ __global__ void seedKernel(MeshView mesh, uint64_t cells, VoxelGrid grid, uint32
   forEachSeededVoxel(mesh, c, grid, [&](uint64_t voxel) { atomicMin(seeds + voxel, uint32_t(c)); });
 }
 
-/// Per boundary face of the tets, per voxel its box reaches: counts the face there (`faces` null), or puts it
-/// in the voxel's next free slot (`slots`, advanced; the row's order is arbitrary).
+/// Per boundary face of the tets, per voxel it meets: counts the face there (`faces` null), or puts it and
+/// the octants it meets in the voxel's next free slot (`slots`, advanced; the row's order is arbitrary).
 __global__ void boundaryFacesKernel(MeshView mesh, const uint32_t *tetNeighbors, VoxelGrid grid,
-                                    uint32_t *slots, uint32_t *faces) {
+                                    uint32_t *slots, uint32_t *faces, uint8_t *octants) {
   const uint64_t entry = globalIndex();
   if (entry >= 4 * mesh.tetCount || tetNeighbors[entry] != kNoCell)
     return;
-  forEachBoundaryVoxel(mesh, uint32_t(entry), grid, [&](uint64_t voxel) {
+  forEachBoundaryVoxel(mesh, uint32_t(entry), grid, [&](uint64_t voxel, uint32_t faceOctants) {
     const uint32_t slot = atomicAdd(slots + voxel, 1u);
-    if (faces)
+    if (faces) {
       faces[slot] = uint32_t(entry);
+      octants[slot] = uint8_t(faceOctants);
+    }
   });
 }
 
@@ -584,8 +586,8 @@ private:
     DeviceBuffer<uint32_t> slots;
     slots.resize(voxels + 1);
     UVR_CUDA_CHECK(cudaMemset(slots.data(), 0, slots.bytes()));
-    boundaryFacesKernel<<<blocksFor(entries, kBlock), kBlock>>>(mesh_, out_.tetNeighbors.data(),
-                                                                out_.seeds.grid, slots.data(), nullptr);
+    boundaryFacesKernel<<<blocksFor(entries, kBlock), kBlock>>>(
+        mesh_, out_.tetNeighbors.data(), out_.seeds.grid, slots.data(), nullptr, nullptr);
     UVR_CUDA_CHECK(cudaGetLastError());
     // Summed in 64 bits: past 2^32 - 1 entries the rows cannot be numbered, and the grid lists none.
     DeviceBuffer<unsigned long long> total;
@@ -601,12 +603,15 @@ private:
                                            int64_t(voxels + 1));
     });
     out_.boundaryFaces.resize(downloadOne(out_.boundaryStart.data() + voxels));
+    out_.boundaryOctants.resize(out_.boundaryFaces.size());
     UVR_CUDA_CHECK(
         cudaMemcpy(slots.data(), out_.boundaryStart.data(), slots.bytes(), cudaMemcpyDeviceToDevice));
     boundaryFacesKernel<<<blocksFor(entries, kBlock), kBlock>>>(
-        mesh_, out_.tetNeighbors.data(), out_.seeds.grid, slots.data(), out_.boundaryFaces.data());
+        mesh_, out_.tetNeighbors.data(), out_.seeds.grid, slots.data(), out_.boundaryFaces.data(),
+        out_.boundaryOctants.data());
     out_.seeds.boundaryStart = out_.boundaryStart.data();
     out_.seeds.boundaryFaces = out_.boundaryFaces.data();
+    out_.seeds.boundaryOctants = out_.boundaryOctants.data();
   }
 
   /// The cells' indices ordered by `keys` (their low `bits` bits; ties by index) into `order`, and the keys

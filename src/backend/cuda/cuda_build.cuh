@@ -28,7 +28,8 @@ struct DeviceAcceleration {
   OccupancyView occupancy; ///< device pointer to occupancyBits
   DeviceBuffer<uint32_t> seedCells;
   DeviceBuffer<uint32_t> boundaryStart, boundaryFaces; ///< empty where not listed
-  SeedGridView seeds;                                  ///< device pointers to the three
+  DeviceBuffer<uint8_t> boundaryOctants;
+  SeedGridView seeds; ///< device pointers to the four
   DeviceBuffer<KdNode> kdNodes;
   DeviceBuffer<Box3f> nodeBounds;
   DeviceBuffer<float> valueMin, valueMax;
@@ -40,8 +41,8 @@ struct DeviceAcceleration {
 
   size_t bytes() const {
     return tetNeighbors.bytes() + bvhNodes.bytes() + bvhCellIds.bytes() + occupancyBits.bytes() +
-           seedCells.bytes() + boundaryStart.bytes() + boundaryFaces.bytes() + kdNodes.bytes() +
-           nodeBounds.bytes() + valueMin.bytes() + valueMax.bytes() + cellCounts.bytes();
+           seedCells.bytes() + boundaryStart.bytes() + boundaryFaces.bytes() + boundaryOctants.bytes() +
+           kdNodes.bytes() + nodeBounds.bytes() + valueMin.bytes() + valueMax.bytes() + cellCounts.bytes();
   }
 };
 

@@ -384,3 +384,4 @@ HostAcceleration CudaRenderer::acceleration() const {
 const std::string &CudaRenderer::deviceName() const { return impl_->deviceName; }
 
 } // namespace uvr
+  seeds.boundaryOctants = copy(accel.boundaryOctants);
