@@ -175,6 +175,36 @@ TEST_P(Integrator, SkippingChangesNoContributingSample) {
   expectSameFrame(skip, coarse, 0.05f, 16);
 }
 
+// A frame's sample totals are the sum and maximum of its per-pixel counts, and a frame that keeps neither
+// per-pixel buffer has the same image and totals.
+TEST_P(Integrator, FrameKeepsWhatIsAskedAndAlwaysItsSampleTotals) {
+  const Mesh mesh = buildMesh(makeBoxGrid(CellType::Tetra, 12, kBox, radial, 0.25f), "box");
+  Renderer renderer(mesh, mesh.findField("f"), 32);
+  renderer.setTransferFunction(TransferFunction(rampMap(), 0.f, 1.f));
+  RenderSettings settings = settingsFor(RenderMode::Full, 0.02f, 0.08f);
+  const Frame kept = renderer.render(obliqueCamera(), settings);
+  ASSERT_EQ(kept.samplesPerPixel.size(), size_t(settings.width * settings.height));
+  ASSERT_EQ(kept.opacity.size(), kept.samplesPerPixel.size());
+  uint64_t total = 0;
+  uint32_t most = 0;
+  for (uint32_t n : kept.samplesPerPixel) {
+    total += n;
+    most = std::max(most, n);
+  }
+  EXPECT_GT(total, 0u);
+  EXPECT_EQ(kept.samplesTotal, total);
+  EXPECT_EQ(kept.samplesMax, most);
+
+  settings.keepOpacity = false;
+  settings.keepSamplesPerPixel = false;
+  const Frame lean = renderer.render(obliqueCamera(), settings);
+  EXPECT_TRUE(lean.opacity.empty());
+  EXPECT_TRUE(lean.samplesPerPixel.empty());
+  EXPECT_EQ(lean.image.rgb, kept.image.rgb);
+  EXPECT_EQ(lean.samplesTotal, total);
+  EXPECT_EQ(lean.samplesMax, most);
+}
+
 TEST_P(Integrator, NoCracksAtPartitionBoundaries) {
   for (CellType type : {CellType::Tetra, CellType::Hexahedron}) {
     const Mesh mesh = buildMesh(makeBoxGrid(type, 10, kBox, [](Vec3f) { return 0.5f; }), "box");

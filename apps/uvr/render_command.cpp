@@ -50,6 +50,9 @@ void runRender(const RenderCommandOptions &o) {
   renderer.setTransferFunction(
       TransferFunction(chooseColorMap(o.view.tf, o.view.tfName), range.min, range.max));
   const Camera camera = chooseCamera(o.view, mesh);
+  // The stats take the frame's sample totals; per-pixel counts only the heat map (a copy from a GPU each).
+  settings.keepOpacity = false;
+  settings.keepSamplesPerPixel = !o.heatmap.empty();
 
   std::vector<double> times, kernelTimes;
   Frame frame;

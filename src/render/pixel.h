@@ -8,10 +8,16 @@
 
 namespace uvr {
 
+/// The samples a frame took, summed over its pixels, and the most any pixel took.
+struct SampleTotals {
+  unsigned long long total = 0;
+  uint32_t max = 0;
+};
+
 struct PixelTarget {
   uint8_t *rgb = nullptr;      ///< 3 bytes per pixel, row-major, top row first
-  float *opacity = nullptr;    ///< accumulated opacity per pixel
-  uint32_t *samples = nullptr; ///< samples taken per pixel
+  float *opacity = nullptr;    ///< accumulated opacity per pixel; null: not kept
+  uint32_t *samples = nullptr; ///< samples taken per pixel; null: not kept
   int width = 0;
   Vec3f background;
 
@@ -24,8 +30,10 @@ struct PixelTarget {
     rgb[3 * index + 0] = toByte(result.color.x + transmittance * background.x);
     rgb[3 * index + 1] = toByte(result.color.y + transmittance * background.y);
     rgb[3 * index + 2] = toByte(result.color.z + transmittance * background.z);
-    opacity[index] = result.color.w;
-    samples[index] = result.samples;
+    if (opacity)
+      opacity[index] = result.color.w;
+    if (samples)
+      samples[index] = result.samples;
   }
 };
 

@@ -203,30 +203,27 @@ void Renderer::render(const Camera &camera, const RenderSettings &settings, Fram
   frame.image.width = settings.width;
   frame.image.height = settings.height;
   frame.image.rgb.resize(3 * pixels);
-  frame.opacity.resize(pixels);
-  frame.samplesPerPixel.resize(pixels);
-  frame.samplesTotal = 0;
-  frame.samplesMax = 0;
+  frame.opacity.resize(settings.keepOpacity ? pixels : 0);
+  frame.samplesPerPixel.resize(settings.keepSamplesPerPixel ? pixels : 0);
   frame.kernelMs = 0.0;
   PixelTarget target;
   target.rgb = frame.image.rgb.data();
-  target.opacity = frame.opacity.data();
-  target.samples = frame.samplesPerPixel.data();
+  target.opacity = settings.keepOpacity ? frame.opacity.data() : nullptr;
+  target.samples = settings.keepSamplesPerPixel ? frame.samplesPerPixel.data() : nullptr;
   target.width = settings.width;
   target.background = settings.background;
   const CameraView view = makeCameraView(camera, settings.width, settings.height);
+  SampleTotals samples;
   if (settings.backend == Backend::Cuda) {
     prepare(Backend::Cuda);
 #ifdef UVR_HAVE_CUDA
-    frame.kernelMs = cuda_->render(view, settings.integrator, target, settings.height);
+    frame.kernelMs = cuda_->render(view, settings.integrator, target, settings.height, samples);
 #endif
   } else {
-    renderCpu(sceneView(), view, settings, target);
+    samples = renderCpu(sceneView(), view, settings, target);
   }
-  for (uint32_t n : frame.samplesPerPixel) {
-    frame.samplesTotal += n;
-    frame.samplesMax = std::max(frame.samplesMax, n);
-  }
+  frame.samplesTotal = samples.total;
+  frame.samplesMax = samples.max;
 }
 
 } // namespace uvr

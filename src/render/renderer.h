@@ -41,10 +41,15 @@ struct RenderSettings {
   int width = 1024;
   int height = 1024;
   Backend backend = Backend::Cpu;
+  /// Per-pixel buffers a frame keeps besides the image (its sample totals are always there): a GPU frame
+  /// copies each one back to the host.
+  bool keepOpacity = true;
+  bool keepSamplesPerPixel = true;
 };
 
 class CudaRenderer;
 struct PixelTarget;
+struct SampleTotals;
 
 /// Acceleration data in host memory: what the CPU backend renders with, or what the GPU built, copied back.
 struct HostAcceleration {
@@ -57,8 +62,8 @@ struct HostAcceleration {
 
 struct Frame {
   Image image;
-  std::vector<float> opacity;            ///< accumulated opacity per pixel, row-major, top row first
-  std::vector<uint32_t> samplesPerPixel; ///< row-major, top row first
+  std::vector<float> opacity; ///< accumulated opacity per pixel, row-major, top row first; or empty
+  std::vector<uint32_t> samplesPerPixel; ///< row-major, top row first; or empty
   uint64_t samplesTotal = 0;
   uint32_t samplesMax = 0;
   double kernelMs = 0.0; ///< the GPU's time in the render kernel alone (CUDA), without copies; 0 on the CPU
@@ -130,8 +135,9 @@ private:
   mutable std::shared_ptr<CudaRenderer> cuda_; // created on first use of the CUDA backend
 };
 
-/// Draws a frame with all cores: one ray per pixel, composited over `settings.background`.
-void renderCpu(const SceneView &scene, const CameraView &camera, const RenderSettings &settings,
-               const PixelTarget &target);
+/// Draws a frame with all cores: one ray per pixel, composited over `settings.background`; returns the
+/// samples taken.
+SampleTotals renderCpu(const SceneView &scene, const CameraView &camera, const RenderSettings &settings,
+                       const PixelTarget &target);
 
 } // namespace uvr

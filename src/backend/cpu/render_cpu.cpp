@@ -4,20 +4,35 @@
 #include <tbb/blocked_range2d.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
+#include <atomic>
+
 namespace uvr {
 
-void renderCpu(const SceneView &scene, const CameraView &camera, const RenderSettings &settings,
-               const PixelTarget &target) {
+SampleTotals renderCpu(const SceneView &scene, const CameraView &camera, const RenderSettings &settings,
+                       const PixelTarget &target) {
+  std::atomic<unsigned long long> total{0};
+  std::atomic<uint32_t> max{0};
   // Small tiles: rays through dense parts of the mesh cost far more than others, so balance finely.
   constexpr int kTile = 16;
   tbb::parallel_for(tbb::blocked_range2d<int>(0, settings.height, kTile, 0, settings.width, kTile),
                     [&](const tbb::blocked_range2d<int> &tile) {
                       uint32_t hint = kNoCell;
+                      SampleTotals tileSamples;
                       for (int y = tile.rows().begin(); y < tile.rows().end(); ++y)
-                        for (int x = tile.cols().begin(); x < tile.cols().end(); ++x)
-                          target.store(x, y,
-                                       integrateRay(scene, settings.integrator, camera.ray(x, y), hint));
+                        for (int x = tile.cols().begin(); x < tile.cols().end(); ++x) {
+                          const RayResult result =
+                              integrateRay(scene, settings.integrator, camera.ray(x, y), hint);
+                          target.store(x, y, result);
+                          tileSamples.total += result.samples;
+                          tileSamples.max = std::max(tileSamples.max, result.samples);
+                        }
+                      total += tileSamples.total;
+                      for (uint32_t seen = max;
+                           seen < tileSamples.max && !max.compare_exchange_weak(seen, tileSamples.max);)
+                        ;
                     });
+  return {total, max};
 }
 
 } // namespace uvr

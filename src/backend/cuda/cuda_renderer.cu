@@ -46,13 +46,30 @@ constexpr unsigned kRenderBlockWidth = 16, kRenderBlockHeight = 8;
 
 __global__ void __launch_bounds__(kRenderBlockWidth *kRenderBlockHeight, 5)
     renderKernel(SceneView scene, IntegratorSettings settings, CameraView camera, PixelTarget target,
-                 int height) {
+                 int height, SampleTotals *samples) {
+  // The block sums its samples in shared memory first: one global atomic per block, not per pixel.
+  __shared__ unsigned long long blockTotal;
+  __shared__ uint32_t blockMax;
+  const bool leader = threadIdx.x == 0 && threadIdx.y == 0;
+  if (leader) {
+    blockTotal = 0;
+    blockMax = 0;
+  }
+  __syncthreads();
   const int x = int(blockIdx.x * blockDim.x + threadIdx.x);
   const int y = int(blockIdx.y * blockDim.y + threadIdx.y);
-  if (x >= target.width || y >= height)
-    return;
-  uint32_t hint = kNoCell; // no neighbouring ray to start from: the seed grid finds the first cell
-  target.store(x, y, integrateRay(scene, settings, camera.ray(x, y), hint));
+  if (x < target.width && y < height) {
+    uint32_t hint = kNoCell; // no neighbouring ray to start from: the seed grid finds the first cell
+    const RayResult result = integrateRay(scene, settings, camera.ray(x, y), hint);
+    target.store(x, y, result);
+    atomicAdd(&blockTotal, (unsigned long long)result.samples);
+    atomicMax(&blockMax, result.samples);
+  }
+  __syncthreads();
+  if (leader) {
+    atomicAdd(&samples->total, blockTotal);
+    atomicMax(&samples->max, blockMax);
+  }
 }
 
 /// Links each KD node to its parent and each partition to its leaf node, for the metadata kernel's walk up.
@@ -178,7 +195,8 @@ struct CudaRenderer::Impl {
   DeviceBuffer<uint8_t> rgb;
   DeviceBuffer<float> opacity;
   DeviceBuffer<uint32_t> samples;
-  PinnedBuffer staging; // the frame's three arrays on their way to the caller's
+  DeviceBuffer<SampleTotals> sampleTotals;
+  PinnedBuffer staging;                                   // the frame's arrays on their way to the caller's
   cudaEvent_t kernelStart = nullptr, kernelEnd = nullptr; // around the render kernel
 
   ~Impl() {
@@ -285,52 +303,67 @@ PartitionMetadata CudaRenderer::metadata() const {
 }
 
 double CudaRenderer::render(const CameraView &camera, const IntegratorSettings &settings,
-                            const PixelTarget &target, int height) {
+                            const PixelTarget &target, int height, SampleTotals &samples) {
   Impl &d = *impl_;
   const size_t pixels = size_t(target.width) * size_t(height);
   d.rgb.resize(3 * pixels);
-  d.opacity.resize(pixels);
-  d.samples.resize(pixels);
+  d.opacity.resize(target.opacity ? pixels : 0);
+  d.samples.resize(target.samples ? pixels : 0);
+  d.sampleTotals.resize(1);
+  UVR_CUDA_CHECK(cudaMemsetAsync(d.sampleTotals.data(), 0, d.sampleTotals.bytes()));
   PixelTarget device = target;
   device.rgb = d.rgb.data();
-  device.opacity = d.opacity.data();
-  device.samples = d.samples.data();
+  device.opacity = target.opacity ? d.opacity.data() : nullptr;
+  device.samples = target.samples ? d.samples.data() : nullptr;
   const dim3 block(kRenderBlockWidth, kRenderBlockHeight);
   const dim3 grid((unsigned(target.width) + block.x - 1) / block.x,
                   (unsigned(height) + block.y - 1) / block.y);
   UVR_CUDA_CHECK(cudaEventRecord(d.kernelStart));
-  renderKernel<<<grid, block>>>(d.scene, settings, camera, device, height);
+  renderKernel<<<grid, block>>>(d.scene, settings, camera, device, height, d.sampleTotals.data());
   UVR_CUDA_CHECK(cudaGetLastError());
   UVR_CUDA_CHECK(cudaEventRecord(d.kernelEnd));
   UVR_CUDA_CHECK(cudaDeviceSynchronize()); // a kernel fault surfaces here
   float kernelMs = 0.f;
   UVR_CUDA_CHECK(cudaEventElapsedTime(&kernelMs, d.kernelStart, d.kernelEnd));
   // The frame comes back through pinned memory, then is copied on all cores into the caller's arrays: 2-3
-  // times faster than three copies into pageable memory.
-  const size_t rgbBytes = d.rgb.bytes(), opacityBytes = d.opacity.bytes(), samplesBytes = d.samples.bytes();
-  d.staging.resize(rgbBytes + opacityBytes + samplesBytes);
+  // times faster than copies into pageable memory. Buffers the caller did not ask for stay on the GPU.
+  struct Part {
+    void *destination;
+    const void *source;
+    size_t bytes; // 0 for a buffer not kept
+  };
+  const Part parts[] = {{&samples, d.sampleTotals.data(), d.sampleTotals.bytes()},
+                        {target.rgb, d.rgb.data(), d.rgb.bytes()},
+                        {target.opacity, d.opacity.data(), d.opacity.bytes()},
+                        {target.samples, d.samples.data(), d.samples.bytes()}};
+  size_t stagedBytes = 0;
+  for (const Part &part : parts)
+    stagedBytes += part.bytes;
+  d.staging.resize(stagedBytes);
   uint8_t *staged = d.staging.data();
-  UVR_CUDA_CHECK(cudaMemcpyAsync(staged, d.rgb.data(), rgbBytes, cudaMemcpyDeviceToHost));
-  UVR_CUDA_CHECK(cudaMemcpyAsync(staged + rgbBytes, d.opacity.data(), opacityBytes, cudaMemcpyDeviceToHost));
-  UVR_CUDA_CHECK(cudaMemcpyAsync(staged + rgbBytes + opacityBytes, d.samples.data(), samplesBytes,
-                                 cudaMemcpyDeviceToHost));
-  UVR_CUDA_CHECK(cudaDeviceSynchronize());
-  const std::pair<void *, size_t> parts[] = {
-      {target.rgb, rgbBytes}, {target.opacity, opacityBytes}, {target.samples, samplesBytes}};
-  constexpr size_t kChunk = size_t(1) << 20;
   size_t offset = 0;
-  for (const auto &[destination, bytes] : parts) {
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, bytes, kChunk), [&](const tbb::blocked_range<size_t> &r) {
-      std::memcpy(static_cast<uint8_t *>(destination) + r.begin(), staged + offset + r.begin(), r.size());
-    });
-    offset += bytes;
+  for (const Part &part : parts) {
+    if (part.bytes > 0)
+      UVR_CUDA_CHECK(cudaMemcpyAsync(staged + offset, part.source, part.bytes, cudaMemcpyDeviceToHost));
+    offset += part.bytes;
+  }
+  UVR_CUDA_CHECK(cudaDeviceSynchronize());
+  constexpr size_t kChunk = size_t(1) << 20;
+  offset = 0;
+  for (const Part &part : parts) {
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, part.bytes, kChunk),
+                      [&](const tbb::blocked_range<size_t> &r) {
+                        std::memcpy(static_cast<uint8_t *>(part.destination) + r.begin(),
+                                    staged + offset + r.begin(), r.size());
+                      });
+    offset += part.bytes;
   }
   return kernelMs;
 }
 
 size_t CudaRenderer::memoryBytes() const {
   const Impl &d = *impl_;
-  return sceneBytes() + d.rgb.bytes() + d.opacity.bytes() + d.samples.bytes();
+  return sceneBytes() + d.rgb.bytes() + d.opacity.bytes() + d.samples.bytes() + d.sampleTotals.bytes();
 }
 
 size_t CudaRenderer::sceneBytes() const {
@@ -365,6 +398,7 @@ HostAcceleration CudaRenderer::acceleration() const {
   seeds.seeds = copy(accel.seedCells);
   seeds.boundaryStart = copy(accel.boundaryStart);
   seeds.boundaryFaces = copy(accel.boundaryFaces);
+  seeds.boundaryOctants = copy(accel.boundaryOctants);
   seeds.grid = accel.seeds.grid;
   Partitions &parts = out.partitions;
   parts.nodes = copy(accel.kdNodes);
@@ -384,4 +418,3 @@ HostAcceleration CudaRenderer::acceleration() const {
 const std::string &CudaRenderer::deviceName() const { return impl_->deviceName; }
 
 } // namespace uvr
-  seeds.boundaryOctants = copy(accel.boundaryOctants);

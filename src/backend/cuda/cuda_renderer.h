@@ -40,10 +40,10 @@ public:
   double buildMs() const;
   const std::vector<std::pair<std::string, double>> &buildSteps() const;
 
-  /// Renders into `target`'s host buffers (width x height pixels); returns the milliseconds the kernel took
-  /// on the GPU, without the copies.
+  /// Renders into `target`'s host buffers (width x height pixels; those null are not copied back) and
+  /// `samples`; returns the milliseconds the kernel took on the GPU, without the copies.
   double render(const CameraView &camera, const IntegratorSettings &settings, const PixelTarget &target,
-                int height);
+                int height, SampleTotals &samples);
 
   /// Device memory held: the scene alone (mesh, field, acceleration, partitions, transfer function), and all
   /// of it including the frame buffers.
