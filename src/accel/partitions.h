@@ -50,9 +50,10 @@ Partitions buildPartitions(const MeshView &mesh, uint32_t leafSize);
 /// Default `leafSize` on the CPU: measured on the brain meshes (see README, "Choosing defaults").
 constexpr uint32_t kDefaultLeafSize = 64;
 /// On the GPU a partition costs more than a few samples (a warp waits for its slowest ray's traversal), so
-/// partitions are larger there: about this many of them, and at least kDefaultLeafSize cells each. Measured
-/// on the brain meshes of 857k to 100M tets (docs/results/gpu_h200.md).
-constexpr uint64_t kDefaultGpuPartitions = 2048;
+/// partitions are larger there: the cell count over this many cells each, at least kDefaultLeafSize (the
+/// median splits make 1-2 times as many leaves). Measured on the brain meshes of 857k to 298M tets
+/// (docs/results/gpu_h200.md); much fewer partitions leave the colour variance too coarse for the steps.
+constexpr uint64_t kDefaultGpuPartitions = 512;
 
 // The steps of the build that the host's and the GPU's share, so that both make the same partitions.
 
