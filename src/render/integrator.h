@@ -69,29 +69,35 @@ UVR_HOST_DEVICE inline bool walkTets(const SceneView &scene, Vec3f p, int maxSte
 /// Finds the cell holding `p` and returns the field there. The walk starts from `cell` (the previous
 /// sample's), or, where `p` lies `far` from it (a step longer than a seed voxel) or there is none, from the
 /// seed of `p`'s voxel. `walkSteps` bounds a walk from `cell`: about 8 per fixed step, since samples lie a
-/// cell or two apart and beyond that the BVH is faster. With `skipEmpty`, points in empty space are rejected
-/// without the BVH: by the occupancy grid at once, or where the walk fails, by the boundary faces' parity.
+/// cell or two apart. With `skipEmpty`, points in empty space are rejected without the BVH: by the occupancy
+/// grid at once, or where the walk fails, by the boundary faces' parity. A walk from the previous sample that
+/// failed (it left the mesh through a concavity, or ran out of steps) is tried again from the seed, which
+/// lies within a voxel; the BVH, a long divergent query on a GPU, is left for what neither walk finds.
 UVR_HOST_DEVICE inline bool locateSample(const SceneView &scene, bool skipEmpty, Vec3f p, int walkSteps,
                                          bool far, uint32_t &cell, float &value) {
   if (skipEmpty && !scene.occupancy.mayHoldCell(p))
     return false;
-  uint32_t start = cell;
-  if (far || start == kNoCell) {
-    if (const uint32_t seed = scene.seeds.seedAt(p); seed != kNoCell) {
-      start = seed;
-      walkSteps = kSeedWalkSteps;
-    }
-  }
-  if (start != kNoCell) {
+  // A walk from `start`; a cell other than a tet is tested alone.
+  auto locateFrom = [&](uint32_t start, int steps) {
     uint32_t found = start;
-    if (scene.tetNeighbors && start < scene.mesh.tetCount ? walkTets(scene, p, walkSteps, found, value)
-                                                          : sampleCell(scene.mesh, start, p, value)) {
-      cell = found;
-      return true;
-    }
-  }
+    if (!(scene.tetNeighbors && start < scene.mesh.tetCount ? walkTets(scene, p, steps, found, value)
+                                                            : sampleCell(scene.mesh, start, p, value)))
+      return false;
+    cell = found;
+    return true;
+  };
+  const bool startAtSeed = far || cell == kNoCell;
+  const uint32_t seed = startAtSeed ? scene.seeds.seedAt(p) : kNoCell;
+  const uint32_t start = seed != kNoCell ? seed : cell;
+  if (start != kNoCell && locateFrom(start, seed != kNoCell ? kSeedWalkSteps : walkSteps))
+    return true;
   if (skipEmpty && scene.seeds.outsideMesh(scene.mesh, p))
     return false;
+  if (!startAtSeed) {
+    const uint32_t nearer = scene.seeds.seedAt(p);
+    if (nearer != kNoCell && nearer != start && locateFrom(nearer, kSeedWalkSteps))
+      return true;
+  }
   return findCell(scene.bvh, p, [&](uint32_t candidate) {
     if (candidate == start || !sampleCell(scene.mesh, candidate, p, value))
       return false;

@@ -54,28 +54,26 @@ dim3 renderBlock(RenderMode mode) {
 __global__ void __launch_bounds__(kRenderBlockThreads, 5)
     renderKernel(SceneView scene, IntegratorSettings settings, CameraView camera, PixelTarget target,
                  int height, SampleTotals *samples) {
-  // The block sums its samples in shared memory first: one global atomic per block, not per pixel.
-  __shared__ unsigned long long blockTotal;
-  __shared__ uint32_t blockMax;
-  const bool leader = threadIdx.x == 0 && threadIdx.y == 0;
-  if (leader) {
-    blockTotal = 0;
-    blockMax = 0;
-  }
-  __syncthreads();
   const int x = int(blockIdx.x * blockDim.x + threadIdx.x);
   const int y = int(blockIdx.y * blockDim.y + threadIdx.y);
+  uint32_t taken = 0; // pixels past the frame's edge take none, and still join the warp's sums below
   if (x < target.width && y < height) {
     uint32_t hint = kNoCell; // no neighbouring ray to start from: the seed grid finds the first cell
     const RayResult result = integrateRay(scene, settings, camera.ray(x, y), hint);
     target.store(x, y, result);
-    atomicAdd(&blockTotal, (unsigned long long)result.samples);
-    atomicMax(&blockMax, result.samples);
+    taken = result.samples;
   }
-  __syncthreads();
-  if (leader) {
-    atomicAdd(&samples->total, blockTotal);
-    atomicMax(&samples->max, blockMax);
+  // The warp sums its samples by shuffles, and one lane adds them: one atomic per warp, no block barrier
+  // holding warps that are done.
+  unsigned long long total = taken;
+  uint32_t most = taken;
+  for (int offset = 16; offset > 0; offset /= 2) {
+    total += __shfl_xor_sync(0xffffffffu, total, offset);
+    most = max(most, __shfl_xor_sync(0xffffffffu, most, offset));
+  }
+  if ((threadIdx.x + blockDim.x * threadIdx.y) % 32 == 0) {
+    atomicAdd(&samples->total, total);
+    atomicMax(&samples->max, most);
   }
 }
 
