@@ -75,6 +75,24 @@ struct SeedGridView {
     return seeds && grid.voxelOf(p, x, y, z) ? seeds[grid.index(x, y, z)] : kNoCell;
   }
 
+  /// A cell to walk to `p` from: its voxel's seed; in a voxel whose centre lies outside the mesh, the tet of
+  /// the lowest-numbered boundary face meeting the octant of `p` (the lowest, so that the order the build
+  /// listed them in does not matter); kNoCell where there is neither.
+  UVR_HOST_DEVICE uint32_t startNear(Vec3f p) const {
+    int x, y, z;
+    if (!seeds || !grid.voxelOf(p, x, y, z))
+      return kNoCell;
+    const uint64_t voxel = grid.index(x, y, z);
+    if (seeds[voxel] != kNoCell || !boundaryStart)
+      return seeds[voxel];
+    const uint32_t octant = octantBit(grid.centre(x, y, z), p);
+    uint32_t lowest = kNoCell;
+    for (uint32_t i = boundaryStart[voxel]; i < boundaryStart[voxel + 1]; ++i)
+      if ((boundaryOctants[i] & octant) && boundaryFaces[i] < lowest)
+        lowest = boundaryFaces[i];
+    return lowest == kNoCell ? kNoCell : lowest >> 2;
+  }
+
   /// True only where `p` lies in no cell of `mesh`: its voxel's centre is inside exactly when it has a seed,
   /// and each boundary face that the segment from there to `p` crosses flips that. The segment lies in the
   /// octant of the voxel that holds `p`, so only the faces meeting that octant are tested. False where that

@@ -70,9 +70,10 @@ UVR_HOST_DEVICE inline bool walkTets(const SceneView &scene, Vec3f p, int maxSte
 /// sample's), or, where `p` lies `far` from it (a step longer than a seed voxel) or there is none, from the
 /// seed of `p`'s voxel. `walkSteps` bounds a walk from `cell`: about 8 per fixed step, since samples lie a
 /// cell or two apart. With `skipEmpty`, points in empty space are rejected without the BVH: by the occupancy
-/// grid at once, or where the walk fails, by the boundary faces' parity. A walk from the previous sample that
-/// failed (it left the mesh through a concavity, or ran out of steps) is tried again from the seed, which
-/// lies within a voxel; the BVH, a long divergent query on a GPU, is left for what neither walk finds.
+/// grid at once, or where the walk fails, by the boundary faces' parity; and a point the parity leaves inside
+/// (the walk left the mesh through a concavity, or ran out of steps) is walked to again from a cell near it
+/// (SeedGridView::startNear), so that the BVH, a long divergent query on a GPU, is left for what neither walk
+/// finds. Without `skipEmpty` a failed walk goes to the BVH, as in a plain ray marcher.
 UVR_HOST_DEVICE inline bool locateSample(const SceneView &scene, bool skipEmpty, Vec3f p, int walkSteps,
                                          bool far, uint32_t &cell, float &value) {
   if (skipEmpty && !scene.occupancy.mayHoldCell(p))
@@ -86,16 +87,15 @@ UVR_HOST_DEVICE inline bool locateSample(const SceneView &scene, bool skipEmpty,
     cell = found;
     return true;
   };
-  const bool startAtSeed = far || cell == kNoCell;
-  const uint32_t seed = startAtSeed ? scene.seeds.seedAt(p) : kNoCell;
+  const uint32_t seed = far || cell == kNoCell ? scene.seeds.seedAt(p) : kNoCell;
   const uint32_t start = seed != kNoCell ? seed : cell;
   if (start != kNoCell && locateFrom(start, seed != kNoCell ? kSeedWalkSteps : walkSteps))
     return true;
-  if (skipEmpty && scene.seeds.outsideMesh(scene.mesh, p))
-    return false;
-  if (!startAtSeed) {
-    const uint32_t nearer = scene.seeds.seedAt(p);
-    if (nearer != kNoCell && nearer != start && locateFrom(nearer, kSeedWalkSteps))
+  if (skipEmpty) {
+    if (scene.seeds.outsideMesh(scene.mesh, p))
+      return false;
+    const uint32_t nearby = scene.seeds.startNear(p);
+    if (nearby != kNoCell && nearby != start && locateFrom(nearby, kSeedWalkSteps))
       return true;
   }
   return findCell(scene.bvh, p, [&](uint32_t candidate) {
