@@ -43,11 +43,15 @@ struct AtomicBox {
     return {{inf, inf, inf}, {negInf, negInf, negInf}};
   }
   __device__ void extend(const Box3f &box) {
-    const float lo[3] = {box.lower.x, box.lower.y, box.lower.z},
-                hi[3] = {box.upper.x, box.upper.y, box.upper.z};
+    const uint32_t lo[3] = {orderedBits(box.lower.x), orderedBits(box.lower.y), orderedBits(box.lower.z)},
+                   hi[3] = {orderedBits(box.upper.x), orderedBits(box.upper.y), orderedBits(box.upper.z)};
+    extendBits(lo, hi);
+  }
+  /// The same for a box given as ordered bits.
+  __device__ void extendBits(const uint32_t lo[3], const uint32_t hi[3]) {
     for (int k = 0; k < 3; ++k) {
-      atomicMin(&lower[k], orderedBits(lo[k]));
-      atomicMax(&upper[k], orderedBits(hi[k]));
+      atomicMin(&lower[k], lo[k]);
+      atomicMax(&upper[k], hi[k]);
     }
   }
   UVR_HOST_DEVICE Box3f box() const {
@@ -446,12 +450,35 @@ __global__ void gatherLeavesKernel(MeshView mesh, uint64_t cells, const KdNode *
   const Box3f box = cellBounds(mesh, c);
   float lo, hi;
   cellValueRange(mesh, c, lo, hi);
+  const uint32_t lower[3] = {orderedBits(box.lower.x), orderedBits(box.lower.y), orderedBits(box.lower.z)},
+                 upper[3] = {orderedBits(box.upper.x), orderedBits(box.upper.y), orderedBits(box.upper.z)};
+  const uint32_t valueMin = orderedBits(lo), valueMax = orderedBits(hi);
   forEachLeafTouching(nodes, box, [&](uint32_t leaf) {
+#if __CUDA_ARCH__ >= 800
+    // Neighbouring cells mostly lie in the same leaf, and every cell's atomics on one leaf's addresses made
+    // large leaves slow to gather: the lanes of the warp that share the leaf combine their values first, and
+    // the lowest of them updates it.
+    const uint32_t sharing = __match_any_sync(__activemask(), leaf);
+    uint32_t lowerHere[3], upperHere[3];
+    for (int k = 0; k < 3; ++k) {
+      lowerHere[k] = __reduce_min_sync(sharing, lower[k]);
+      upperHere[k] = __reduce_max_sync(sharing, upper[k]);
+    }
+    const uint32_t valueMinHere = __reduce_min_sync(sharing, valueMin),
+                   valueMaxHere = __reduce_max_sync(sharing, valueMax);
+    const unsigned long long cellsHere = __popc(sharing);
+    if ((threadIdx.x & 31u) != uint32_t(__ffs(sharing) - 1))
+      return;
+#else
+    const uint32_t *lowerHere = lower, *upperHere = upper;
+    const uint32_t valueMinHere = valueMin, valueMaxHere = valueMax;
+    const unsigned long long cellsHere = 1;
+#endif
     LeafAccumulator &acc = leaves[leaf];
-    acc.cells.extend(box);
-    atomicMin(&acc.valueMin, orderedBits(lo));
-    atomicMax(&acc.valueMax, orderedBits(hi));
-    atomicAdd(&acc.count, 1ull);
+    acc.cells.extendBits(lowerHere, upperHere);
+    atomicMin(&acc.valueMin, valueMinHere);
+    atomicMax(&acc.valueMax, valueMaxHere);
+    atomicAdd(&acc.count, cellsHere);
   });
 }
 
