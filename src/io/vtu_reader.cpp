@@ -366,8 +366,6 @@ struct VtuGrid {
   Buffer<uint32_t> connectivity; ///< narrowed as it is read (see NarrowPointIndex)
   Buffer<uint8_t> types;
   std::vector<ScalarField> fields;
-
-  CellArrays<uint32_t> cells() const { return {offsets, connectivity, types}; }
 };
 
 class VtuReader {
@@ -934,7 +932,9 @@ UnstructuredGrid readVtu(const std::string &path) {
 
 Mesh loadVtu(const std::string &path) {
   VtuGrid grid = VtuReader(path).read();
-  return buildMesh(std::move(grid.points), grid.cells(), std::move(grid.fields), path);
+  return buildMesh(std::move(grid.points),
+                   CellBuffers{std::move(grid.offsets), std::move(grid.connectivity), std::move(grid.types)},
+                   std::move(grid.fields), path);
 }
 
 } // namespace uvr
