@@ -112,15 +112,20 @@ private:
   static constexpr size_t kSplitCells = size_t(1) << 16;
 
   /// Places cells [begin, end), numbering points not in `newIndex` yet from `next` on; returns the next
-  /// number. The source cells of later places are prefetched, since the order jumps all over them.
+  /// number. The order jumps all over the source cells, and their points' numbers are as scattered: the loop
+  /// asks for a later cell's corners early, and for their numbers once those corners have arrived.
   template <size_t Corners>
   static uint32_t number(uint32_t *cells, const uint32_t *source, std::span<const uint32_t> order,
                          size_t begin, size_t end, uint32_t *newIndex, uint32_t next) {
     constexpr size_t kPrefetchCells = 16;
+    auto sourceCell = [&](size_t i) { return source + (order.empty() ? i : size_t(order[i])) * Corners; };
     for (size_t i = begin; i < end; ++i) {
-      if (i + kPrefetchCells < order.size())
-        __builtin_prefetch(source + size_t(order[i + kPrefetchCells]) * Corners);
-      const uint32_t *from = source + (order.empty() ? i : size_t(order[i])) * Corners;
+      if (i + 2 * kPrefetchCells < end)
+        __builtin_prefetch(sourceCell(i + 2 * kPrefetchCells));
+      if (i + kPrefetchCells < end)
+        for (size_t k = 0; k < Corners; ++k)
+          __builtin_prefetch(newIndex + sourceCell(i + kPrefetchCells)[k]);
+      const uint32_t *from = sourceCell(i);
       for (size_t k = 0; k < Corners; ++k) {
         uint32_t &index = newIndex[from[k]];
         if (index == kUnused)
