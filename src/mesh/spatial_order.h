@@ -63,11 +63,14 @@ Buffer<uint32_t> sortedOrder(Buffer<uint64_t> &keys);
 
 /// Item i of `items` becomes item order[i] of `source` (item i where `order` is empty: in order already), for
 /// `count` items of `Stride` elements (a constant, so that an item's copy is a few moves and no memmove
-/// call); in parallel.
+/// call); in parallel. The order jumps all over `source`, so the loop asks for a later item early.
 template <size_t Stride, typename T>
 void gather(T *items, const T *source, size_t count, std::span<const uint32_t> order) {
   tbb::parallel_for(tbb::blocked_range<size_t>(0, count, 1 << 12), [&](const tbb::blocked_range<size_t> &r) {
+    constexpr size_t kPrefetchItems = 32;
     for (size_t i = r.begin(); i < r.end(); ++i) {
+      if (!order.empty() && i + kPrefetchItems < r.end())
+        __builtin_prefetch(source + size_t(order[i + kPrefetchItems]) * Stride);
       const size_t from = order.empty() ? i : size_t(order[i]);
       for (size_t k = 0; k < Stride; ++k)
         items[i * Stride + k] = source[from * Stride + k];
