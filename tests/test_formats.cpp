@@ -15,6 +15,8 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <numeric>
+#include <random>
 #include <sstream>
 
 using namespace uvr;
@@ -240,6 +242,83 @@ TEST_F(Formats, SaveMeshByExtension) {
   expectSameMesh(loadMesh(path("a.VTU")), loadMesh(path("a.umesh")));
   const std::string error = errorOf([&] { saveMesh(path("a.obj"), mesh); });
   EXPECT_NE(error.find("cannot write mesh format '.obj'"), std::string::npos) << error;
+}
+
+namespace {
+
+/// A jittered box grid of one cell type as files list cells: shuffled, and every third one wound the other
+/// way.
+UnstructuredGrid shuffledGrid(CellType type) {
+  const UnstructuredGrid lattice = makeBoxGrid(
+      type, 4, Box3f{{0.f, 0.f, 0.f}, {1.f, 1.f, 1.f}}, [](Vec3f p) { return p.x - p.z; }, 0.2f, 5);
+  const size_t corners = size_t(vertexCount(uint8_t(type))), cellCount = lattice.types.size();
+  std::vector<size_t> order(cellCount);
+  std::iota(order.begin(), order.end(), size_t(0));
+  std::shuffle(order.begin(), order.end(), std::mt19937(9));
+  UnstructuredGrid grid = lattice;
+  grid.connectivity.clear();
+  for (size_t i = 0; i < cellCount; ++i) {
+    std::vector<int64_t> v(lattice.connectivity.begin() + std::ptrdiff_t(order[i] * corners),
+                           lattice.connectivity.begin() + std::ptrdiff_t((order[i] + 1) * corners));
+    if (i % 3 == 0) { // mirrored: a tet's or pyramid's base reversed, a wedge's or hexahedron's ends swapped
+      if (type == CellType::Tetra)
+        std::swap(v[1], v[2]);
+      else if (type == CellType::Pyramid)
+        std::swap(v[1], v[3]);
+      else
+        std::rotate(v.begin(), v.begin() + std::ptrdiff_t(corners / 2), v.end());
+    }
+    grid.connectivity.insert(grid.connectivity.end(), v.begin(), v.end());
+  }
+  for (size_t f = 0; f < grid.fields.size(); ++f)
+    if (grid.fields[f].centering == Centering::Cell)
+      for (size_t i = 0; i < cellCount; ++i)
+        grid.fields[f].values[i] = lattice.fields[f].values[order[i]];
+  return grid;
+}
+
+/// The mesh that buildMesh makes of the grid's cells handed over, point indices narrowed.
+Mesh buildHandedOver(const UnstructuredGrid &grid) {
+  CellBuffers cells{Buffer<int64_t>(grid.offsets.size()), Buffer<uint32_t>(grid.connectivity.size()),
+                    Buffer<uint8_t>(grid.types.size())};
+  std::copy(grid.offsets.begin(), grid.offsets.end(), cells.offsets.begin());
+  std::transform(grid.connectivity.begin(), grid.connectivity.end(), cells.connectivity.begin(),
+                 [](int64_t id) { return uint32_t(id); });
+  std::copy(grid.types.begin(), grid.types.end(), cells.types.begin());
+  return buildMesh(UninitVector<Vec3f>(grid.points), std::move(cells), std::vector<ScalarField>(grid.fields),
+                   "handed.vtu");
+}
+
+} // namespace
+
+// Cells of one type back to back become the mesh's cell array in place; any others are grouped by type. Both
+// give the mesh that the grouping of a grid viewed in place gives.
+TEST(BuildMesh, HandedOverCellsBuildAsViewedOnes) {
+  for (CellType type : {CellType::Tetra, CellType::Pyramid, CellType::Wedge, CellType::Hexahedron}) {
+    UnstructuredGrid grid = shuffledGrid(type);
+    const Mesh viewed = buildMesh(UnstructuredGrid(grid), "viewed.vtu");
+    EXPECT_GT(viewed.invertedCells, 0u);
+    const Mesh handed = buildHandedOver(grid);
+    expectSameMesh(viewed, handed);
+    EXPECT_EQ(handed.invertedCells, viewed.invertedCells);
+
+    // A triangle after them, skipped: the cells are no longer all of one type.
+    grid.types.push_back(5);
+    grid.connectivity.insert(grid.connectivity.end(), {0, 1, 2});
+    grid.offsets.push_back(grid.offsets.back() + 3);
+    for (ScalarField &field : grid.fields)
+      if (field.centering == Centering::Cell)
+        field.values.push_back(0.f);
+    const Mesh mixed = buildHandedOver(grid);
+    EXPECT_EQ(mixed.skippedCells, 1u);
+    expectSameMesh(viewed, mixed);
+  }
+  UnstructuredGrid grid = shuffledGrid(CellType::Tetra);
+  grid.connectivity[41] = int64_t(grid.points.size());
+  const std::string error = errorOf([&] { buildHandedOver(grid); });
+  EXPECT_NE(error.find("cell 10: point index " + std::to_string(grid.points.size()) + " outside"),
+            std::string::npos)
+      << error;
 }
 
 // uvr writes .umesh with points numbered by first use, and reading keeps such a file's order as it is; any

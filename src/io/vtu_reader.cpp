@@ -160,6 +160,26 @@ struct NarrowPointIndex {
   }
 };
 
+/// A value check that every value passes.
+struct AnyValue {
+  template <typename Value> bool operator()(Value) const { return false; }
+};
+
+/// The least of the indices that threads note, or `none`.
+class LeastIndex {
+public:
+  explicit LeastIndex(uint64_t none) : least_(none) {}
+  void note(uint64_t index) {
+    uint64_t least = least_.load(std::memory_order_relaxed);
+    while (index < least && !least_.compare_exchange_weak(least, index, std::memory_order_relaxed)) {
+    }
+  }
+  uint64_t least() const { return least_.load(); }
+
+private:
+  std::atomic<uint64_t> least_;
+};
+
 /// Converts `count` packed values of `type` (byte-swapped when `swap`) to Dst by `to`.
 template <typename Dst, typename To>
 void convert(ScalarType type, bool swap, const uint8_t *src, uint64_t count, Dst *dst, const To &to) {
@@ -366,8 +386,6 @@ struct VtuGrid {
   Buffer<uint32_t> connectivity; ///< narrowed as it is read (see NarrowPointIndex)
   Buffer<uint8_t> types;
   std::vector<ScalarField> fields;
-
-  CellArrays<uint32_t> cells() const { return {offsets, connectivity, types}; }
 };
 
 class VtuReader {
@@ -724,18 +742,33 @@ private:
     return locate(array, bytes);
   }
 
-  /// Writes the array's `count` values (as prepared) to out, converted to T by `to`.
-  template <typename T, typename To = CastTo<T>>
-  void fill(const ArrayInfo &array, const Payload &payload, uint64_t count, T *out, const To &to = {}) const {
-    if (array.format == Format::Ascii) {
-      parseAscii(array, count, out, to);
-    } else if (std::is_same_v<To, CastTo<T>> && array.type == scalarTypeOf<T>() && !swap_) {
-      decode(array, payload, reinterpret_cast<uint8_t *>(out));
-    } else {
-      forEachRun(array, payload, sizeOf(array.type), [&](const uint8_t *bytes, uint64_t first, uint64_t n) {
-        convert(array.type, swap_, bytes, n, out + first, to);
-      });
+  /// Writes the array's `count` values (as prepared) to out, converted to T by `to`. Returns the index of the
+  /// first value that `bad` flags, or count; runs of converted values are checked as they are written, while
+  /// in cache.
+  template <typename T, typename To = CastTo<T>, typename Bad = AnyValue>
+  uint64_t fill(const ArrayInfo &array, const Payload &payload, uint64_t count, T *out, const To &to = {},
+                const Bad &bad = {}) const {
+    const bool direct = std::is_same_v<To, CastTo<T>> && array.type == scalarTypeOf<T>() && !swap_;
+    if (array.format == Format::Ascii || direct) {
+      if (array.format == Format::Ascii)
+        parseAscii(array, count, out, to);
+      else
+        decode(array, payload, reinterpret_cast<uint8_t *>(out));
+      if constexpr (std::is_same_v<Bad, AnyValue>)
+        return count;
+      else
+        return findFirst(count, [&](uint64_t i) { return bad(out[i]); });
     }
+    LeastIndex firstBad(count);
+    forEachRun(array, payload, sizeOf(array.type), [&](const uint8_t *bytes, uint64_t first, uint64_t n) {
+      convert(array.type, swap_, bytes, n, out + first, to);
+      for (uint64_t i = first; i < first + n; ++i)
+        if (bad(out[i])) {
+          firstBad.note(i);
+          break;
+        }
+    });
+    return firstBad.least();
   }
 
   /// The array's `count` values in an Array of them: an UninitVector or a Buffer.
@@ -777,13 +810,10 @@ private:
       static_assert(sizeof(Vec3f) == 3 * sizeof(float));
       Payload payload = prepare(array, values);
       grid.points.resize(pointCount);
-      fill(array, payload, values, &grid.points[0].x);
-      uint64_t bad = findFirst(pointCount, [&](uint64_t i) {
-        Vec3f p = grid.points[i];
-        return !std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z);
-      });
-      if (bad < pointCount)
-        fail(array, array.position, "point " + std::to_string(bad) + " is not finite");
+      const uint64_t bad = fill(array, payload, values, &grid.points[0].x, CastTo<float>{},
+                                [](float x) { return !std::isfinite(x); });
+      if (bad < values)
+        fail(array, array.position, "point " + std::to_string(bad / 3) + " is not finite");
     }
 
     grid.offsets = Buffer<int64_t>(1);
@@ -808,9 +838,9 @@ private:
         throw Error(path_, "", "more than 2^32 points are not supported"); // as buildMesh says
       Payload indices = prepare(connectivity, connectivityCount);
       grid.connectivity = Buffer<uint32_t>(connectivityCount);
-      fill(connectivity, indices, connectivityCount, grid.connectivity.data(), NarrowPointIndex{pointCount});
-      bad = findFirst(connectivityCount,
-                      [&](uint64_t i) { return grid.connectivity[i] == NarrowPointIndex::kOutside; });
+      bad = fill(connectivity, indices, connectivityCount, grid.connectivity.data(),
+                 NarrowPointIndex{pointCount},
+                 [](uint32_t index) { return index == NarrowPointIndex::kOutside; });
       if (bad < connectivityCount) // named by its value in the file, read again
         fail(connectivity, connectivity.position,
              "point index " +
@@ -934,7 +964,9 @@ UnstructuredGrid readVtu(const std::string &path) {
 
 Mesh loadVtu(const std::string &path) {
   VtuGrid grid = VtuReader(path).read();
-  return buildMesh(std::move(grid.points), grid.cells(), std::move(grid.fields), path);
+  return buildMesh(std::move(grid.points),
+                   CellBuffers{std::move(grid.offsets), std::move(grid.connectivity), std::move(grid.types)},
+                   std::move(grid.fields), path);
 }
 
 } // namespace uvr

@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <functional>
 #include <string>
@@ -198,23 +199,133 @@ int Mesh::findField(const std::string &name) const {
   return -1;
 }
 
-Mesh buildMesh(UnstructuredGrid &&grid, const std::string &source) {
-  return buildMesh(std::move(grid.points), CellArraysView{grid.offsets, grid.connectivity, grid.types},
-                   std::move(grid.fields), source);
-}
+namespace {
 
-template <typename Index>
-Mesh buildMesh(UninitVector<Vec3f> &&points, CellArrays<Index> grid, std::vector<ScalarField> &&fields,
-               const std::string &source) {
+/// A mesh's cells before they are wound and ordered: each volume type's corners back to back, 32-bit point
+/// indices, in the order tets, pyramids, wedges, hexahedra (Mesh's).
+struct TypeArrays {
+  std::array<Buffer<uint32_t>, 4> cells;
+  std::array<uint64_t, 4> counts{};
+};
+
+template <typename Index> void checkSpan(const CellArrays<Index> &grid, const std::string &source) {
   const size_t cellCount = grid.types.size();
   if (grid.offsets.size() != cellCount + 1)
     throw Error(source, "", "cell offsets and cell types disagree in count");
   if (grid.offsets[0] != 0 || uint64_t(grid.offsets[cellCount]) > grid.connectivity.size())
     throw Error(source, "", "cell offsets do not span the connectivity array");
+}
 
-  // Parallel passes over chunks of cells: the first checks the cells and counts each chunk's cells of each
-  // type, which says where the second writes them. Errors name the first bad cell in file order, as a serial
-  // pass would.
+/// Says which point index of cell c lies outside the points.
+template <typename Index>
+[[noreturn]] void throwOutside(const CellArrays<Index> &grid, size_t c, uint64_t pointCount,
+                               const std::string &source) {
+  const Index *ids = &grid.connectivity[size_t(grid.offsets[c])];
+  const Index bad =
+      *std::find_if(ids, ids + vertexCount(grid.types[c]), [&](Index id) { return outside(id, pointCount); });
+  throw Error(source, "cell " + std::to_string(c),
+              "point index " + std::to_string(bad) + " outside [0, " + std::to_string(pointCount) + ")");
+}
+
+void checkPointCount(size_t pointCount, const std::string &source) {
+  if (pointCount > UINT32_MAX)
+    throw Error(source, "", "more than 2^32 points are not supported");
+}
+
+/// Cell fields one value per cell of the file, point fields one per point.
+void checkFieldSizes(const std::vector<ScalarField> &fields, size_t cellCount, size_t pointCount,
+                     const std::string &source) {
+  for (const ScalarField &field : fields) {
+    if (field.centering == Centering::Cell && field.values.size() != cellCount)
+      throw Error(source, "",
+                  "cell field '" + field.name + "' has " + std::to_string(field.values.size()) +
+                      " values for " + std::to_string(cellCount) + " cells");
+    if (field.centering == Centering::Point && field.values.size() != pointCount)
+      throw Error(source, "",
+                  "point field '" + field.name + "' has " + std::to_string(field.values.size()) +
+                      " values for " + std::to_string(pointCount) + " points");
+  }
+}
+
+/// The mesh from its points, its cells grouped by type and its fields with cell values in type order: the
+/// cells wound, each type's ordered along the Morton curve, the points numbered by first use.
+Mesh windAndOrder(UninitVector<Vec3f> &&points, TypeArrays &&types, std::vector<ScalarField> &&fields,
+                  uint64_t skippedCells) {
+  Mesh mesh;
+  mesh.skippedCells = skippedCells;
+  mesh.points = std::move(points);
+  const CellKeys cellKeys(mesh.bounds());
+  const std::array<uint64_t, 4> &perType = types.counts;
+  const std::array<uint64_t, 4> firstCell = {0, perType[0], perType[0] + perType[1],
+                                             perType[0] + perType[1] + perType[2]};
+  const uint64_t keptCells = firstCell[3] + perType[3];
+
+  // Winding and keys in a pass over each type array. Files seldom list cells in spatial order, so the
+  // corners' points are loaded from all over memory: the loop asks for those of a later cell early.
+  std::array<Buffer<uint64_t>, 4> typeKeys;
+  auto windAndKey = [&]<CellType Type, int Corners>(size_t s) {
+    constexpr size_t kPrefetchCells = 16;
+    typeKeys[s] = Buffer<uint64_t>(perType[s]);
+    return tbb::parallel_reduce(
+        tbb::blocked_range<size_t>(0, perType[s], 1 << 12), uint64_t(0),
+        [&](const tbb::blocked_range<size_t> &r, uint64_t inverted) {
+          for (size_t c = r.begin(); c < r.end(); ++c) {
+            uint32_t *v = types.cells[s].data() + c * Corners;
+            if (c + kPrefetchCells < r.end())
+              for (int i = 0; i < Corners; ++i)
+                __builtin_prefetch(&mesh.points[v[kPrefetchCells * Corners + i]]);
+            inverted += orientCell(Type, v, mesh.points);
+            typeKeys[s][c] = cellKeys.key(v, Corners, mesh.points, c);
+          }
+          return inverted;
+        },
+        std::plus<>());
+  };
+  mesh.invertedCells = windAndKey.template operator()<CellType::Tetra, 4>(0) +
+                       windAndKey.template operator()<CellType::Pyramid, 5>(1) +
+                       windAndKey.template operator()<CellType::Wedge, 6>(2) +
+                       windAndKey.template operator()<CellType::Hexahedron, 8>(3);
+
+  std::array<Buffer<uint32_t>, 4> orders;
+  for (size_t s = 0; s < 4; ++s)
+    orders[s] = sortedOrder(typeKeys[s]);
+  // The cells are placed in a serial pass (see FirstUseNumbering), the cell fields meanwhile on the other
+  // threads.
+  tbb::task_group cellFields;
+  cellFields.run([&] {
+    for (ScalarField &field : fields) {
+      if (field.centering == Centering::Cell) {
+        UninitVector<float> sorted(keptCells);
+        for (size_t s = 0; s < 4; ++s)
+          gather<1>(sorted.data() + firstCell[s], field.values.data() + firstCell[s], perType[s], orders[s]);
+        field.values = std::move(sorted);
+      }
+    }
+  });
+  FirstUseNumbering numbering(mesh.points.size());
+  auto placeCells = [&]<size_t Corners>(size_t s, UninitVector<uint32_t> &cells) {
+    cells.resize(perType[s] * Corners);
+    numbering.place<Corners>(cells.data(), types.cells[s].data(), perType[s], orders[s]);
+  };
+  placeCells.template operator()<4>(0, mesh.tets);
+  placeCells.template operator()<5>(1, mesh.pyramids);
+  placeCells.template operator()<6>(2, mesh.wedges);
+  placeCells.template operator()<8>(3, mesh.hexes);
+  cellFields.wait();
+  mesh.fields = std::move(fields);
+  numbering.reorderPoints(mesh);
+  return mesh;
+}
+
+/// Groups cells of any types by type, in two parallel passes over chunks of cells: the first checks the cells
+/// and counts each chunk's cells of each type, which says where the second writes them (and the cell field
+/// values, in type order in place of the file's). Errors name the first bad cell in file order, as a serial
+/// pass would.
+template <typename Index>
+Mesh groupAndBuild(UninitVector<Vec3f> &&points, CellArrays<Index> grid, std::vector<ScalarField> &&fields,
+                   const std::string &source) {
+  const size_t cellCount = grid.types.size();
+  checkSpan(grid, source);
   constexpr size_t kChunkCells = size_t(1) << 14;
   struct Chunk {
     std::array<uint64_t, 4> perType{}; ///< in pass 2: the chunk's first cell of each type, within its type
@@ -242,36 +353,28 @@ Mesh buildMesh(UninitVector<Vec3f> &&points, CellArrays<Index> grid, std::vector
         ++chunk.skipped;
     }
   });
-  Mesh mesh;
-  std::array<uint64_t, 4> perType{};
+  TypeArrays types;
+  std::array<uint64_t, 4> &perType = types.counts;
+  uint64_t skippedCells = 0;
   for (Chunk &chunk : chunks) {
     if (chunk.firstMalformed != SIZE_MAX)
       throwMalformed(grid, chunk.firstMalformed, source);
     for (size_t s = 0; s < 4; ++s)
       perType[s] += std::exchange(chunk.perType[s], perType[s]);
-    mesh.skippedCells += chunk.skipped;
+    skippedCells += chunk.skipped;
   }
-  if (points.size() > UINT32_MAX)
-    throw Error(source, "", "more than 2^32 points are not supported");
+  checkPointCount(points.size(), source);
 
-  // Pass 2 writes each type's cells (32-bit indices) and the cell field values in type order to Buffers. The
-  // mesh's arrays take them once the cells are wound and sorted along orderSpatially's Morton curve.
-  mesh.points = std::move(points);
-  const CellKeys cellKeys(mesh.bounds());
   const std::array<uint64_t, 4> firstCell = {0, perType[0], perType[0] + perType[1],
                                              perType[0] + perType[1] + perType[2]};
   const uint64_t keptCells = firstCell[3] + perType[3];
-  std::array<Buffer<uint32_t>, 4> typeCells;
-  std::array<Buffer<uint64_t>, 4> typeKeys;
-  for (size_t s = 0; s < 4; ++s) {
-    typeCells[s] = Buffer<uint32_t>(perType[s] * uint64_t(kSlotKinds[s].corners));
-    typeKeys[s] = Buffer<uint64_t>(perType[s]);
-  }
+  for (size_t s = 0; s < 4; ++s)
+    types.cells[s] = Buffer<uint32_t>(perType[s] * uint64_t(kSlotKinds[s].corners));
   // A cell field of the wrong size is reported below, after the cells.
-  std::vector<Buffer<float>> typeOrderValues(fields.size());
+  std::vector<UninitVector<float>> typeOrderValues(fields.size());
   for (size_t f = 0; f < fields.size(); ++f)
     if (fields[f].centering == Centering::Cell && fields[f].values.size() == cellCount)
-      typeOrderValues[f] = Buffer<float>(keptCells);
+      typeOrderValues[f].resize(keptCells);
 
   forEachChunk([&](Chunk &chunk, size_t begin, size_t end) {
     std::array<uint64_t, 4> next = chunk.perType;
@@ -280,10 +383,10 @@ Mesh buildMesh(UninitVector<Vec3f> &&points, CellArrays<Index> grid, std::vector
       if (!volumeKind(grid.types[c], kind))
         continue;
       const int s = slotOf(kind.type);
-      uint32_t *v = typeCells[s].data() + next[s] * uint64_t(kind.corners);
+      uint32_t *v = types.cells[s].data() + next[s] * uint64_t(kind.corners);
       const Index *ids = &grid.connectivity[size_t(grid.offsets[c])];
       for (int i = 0; i < kind.corners; ++i) {
-        if (outside(ids[i], mesh.points.size())) {
+        if (outside(ids[i], points.size())) {
           chunk.firstBadIndex = c;
           return;
         }
@@ -299,87 +402,72 @@ Mesh buildMesh(UninitVector<Vec3f> &&points, CellArrays<Index> grid, std::vector
       ++next[s];
     }
   });
-  // Winding and keys in a pass of their own over each type array. Files seldom list cells in spatial order,
-  // so the corners' points are loaded from all over memory: the loop asks for those of a later cell early.
-  auto windAndKey = [&]<CellType Type, int Corners>(size_t s) {
-    constexpr size_t kPrefetchCells = 16;
-    return tbb::parallel_reduce(
-        tbb::blocked_range<size_t>(0, perType[s], 1 << 12), uint64_t(0),
-        [&](const tbb::blocked_range<size_t> &r, uint64_t inverted) {
-          for (size_t c = r.begin(); c < r.end(); ++c) {
-            uint32_t *v = typeCells[s].data() + c * Corners;
-            if (c + kPrefetchCells < r.end())
-              for (int i = 0; i < Corners; ++i)
-                __builtin_prefetch(&mesh.points[v[kPrefetchCells * Corners + i]]);
-            inverted += orientCell(Type, v, mesh.points);
-            typeKeys[s][c] = cellKeys.key(v, Corners, mesh.points, c);
-          }
-          return inverted;
-        },
-        std::plus<>());
-  };
-  for (const Chunk &chunk : chunks) {
-    if (chunk.firstBadIndex != SIZE_MAX) {
-      const size_t c = chunk.firstBadIndex;
-      const Index *ids = &grid.connectivity[size_t(grid.offsets[c])];
-      const Index bad = *std::find_if(ids, ids + vertexCount(grid.types[c]),
-                                      [&](Index id) { return outside(id, mesh.points.size()); });
-      throw Error(source, "cell " + std::to_string(c),
-                  "point index " + std::to_string(bad) + " outside [0, " +
-                      std::to_string(mesh.points.size()) + ")");
-    }
-  }
-  mesh.invertedCells = windAndKey.template operator()<CellType::Tetra, 4>(0) +
-                       windAndKey.template operator()<CellType::Pyramid, 5>(1) +
-                       windAndKey.template operator()<CellType::Wedge, 6>(2) +
-                       windAndKey.template operator()<CellType::Hexahedron, 8>(3);
-  for (size_t f = 0; f < fields.size(); ++f) {
-    const ScalarField &field = fields[f];
-    if (field.centering == Centering::Cell && field.values.size() != cellCount)
-      throw Error(source, "",
-                  "cell field '" + field.name + "' has " + std::to_string(field.values.size()) +
-                      " values for " + std::to_string(cellCount) + " cells");
-    if (field.centering == Centering::Point && field.values.size() != mesh.points.size())
-      throw Error(source, "",
-                  "point field '" + field.name + "' has " + std::to_string(field.values.size()) +
-                      " values for " + std::to_string(mesh.points.size()) + " points");
-  }
-
-  std::array<Buffer<uint32_t>, 4> orders;
-  for (size_t s = 0; s < 4; ++s)
-    orders[s] = sortedOrder(typeKeys[s]);
-  // The cells are placed in a serial pass (see FirstUseNumbering), the cell fields meanwhile on the other
-  // threads.
-  tbb::task_group cellFields;
-  cellFields.run([&] {
-    for (size_t f = 0; f < fields.size(); ++f) {
-      if (fields[f].centering == Centering::Cell) {
-        fields[f].values.resize(keptCells);
-        for (size_t s = 0; s < 4; ++s)
-          gather<1>(fields[f].values.data() + firstCell[s], typeOrderValues[f].data() + firstCell[s],
-                    perType[s], orders[s]);
-      }
-    }
-  });
-  FirstUseNumbering numbering(mesh.points.size());
-  auto placeCells = [&]<size_t Corners>(size_t s, UninitVector<uint32_t> &cells) {
-    cells.resize(perType[s] * Corners);
-    numbering.place<Corners>(cells.data(), typeCells[s].data(), perType[s], orders[s]);
-  };
-  placeCells.template operator()<4>(0, mesh.tets);
-  placeCells.template operator()<5>(1, mesh.pyramids);
-  placeCells.template operator()<6>(2, mesh.wedges);
-  placeCells.template operator()<8>(3, mesh.hexes);
-  cellFields.wait();
-  for (ScalarField &field : fields)
-    mesh.fields.push_back(std::move(field));
-  numbering.reorderPoints(mesh);
-  return mesh;
+  for (const Chunk &chunk : chunks)
+    if (chunk.firstBadIndex != SIZE_MAX)
+      throwOutside(grid, chunk.firstBadIndex, points.size(), source);
+  checkFieldSizes(fields, cellCount, points.size(), source);
+  for (size_t f = 0; f < fields.size(); ++f)
+    if (fields[f].centering == Centering::Cell)
+      fields[f].values = std::move(typeOrderValues[f]);
+  return windAndOrder(std::move(points), std::move(types), std::move(fields), skippedCells);
 }
 
-template Mesh buildMesh(UninitVector<Vec3f> &&, CellArrays<int64_t>, std::vector<ScalarField> &&,
-                        const std::string &);
-template Mesh buildMesh(UninitVector<Vec3f> &&, CellArrays<uint32_t>, std::vector<ScalarField> &&,
-                        const std::string &);
+/// The slot of the one linear volume type of all cells, when they lie back to back in the connectivity (cell
+/// c's corners from entry c * corners on) and name points that exist: the connectivity is then that type's
+/// cell array as it is, and the cells are in type order. -1 otherwise.
+int backToBackSlot(const CellArrays<uint32_t> &grid, size_t pointCount) {
+  const size_t cellCount = grid.types.size();
+  CellKind kind;
+  // The type code must be the kept type's own: voxels' corners are reordered, higher-order cells have more
+  // points than corners.
+  if (cellCount == 0 || !volumeKind(grid.types[0], kind) || uint8_t(kind.type) != grid.types[0])
+    return -1;
+  const uint8_t type = grid.types[0];
+  const auto corners = uint64_t(kind.corners);
+  if (uint64_t(grid.offsets[cellCount]) != cellCount * corners) // else the connectivity may be shorter
+    return -1;
+  std::atomic<bool> backToBack = true;
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, cellCount, size_t(1) << 16),
+                    [&](const tbb::blocked_range<size_t> &r) {
+                      if (!backToBack.load(std::memory_order_relaxed))
+                        return;
+                      // Without early exits, so that the loops vectorise.
+                      bool ok = true;
+                      for (size_t c = r.begin(); c < r.end(); ++c)
+                        ok &= (grid.types[c] == type) & (uint64_t(grid.offsets[c + 1]) == (c + 1) * corners);
+                      for (size_t i = r.begin() * corners; i < r.end() * corners; ++i)
+                        ok &= grid.connectivity[i] < pointCount;
+                      if (!ok)
+                        backToBack.store(false, std::memory_order_relaxed);
+                    });
+  return backToBack ? slotOf(kind.type) : -1;
+}
+
+} // namespace
+
+Mesh buildMesh(UnstructuredGrid &&grid, const std::string &source) {
+  return buildMesh(std::move(grid.points), CellArraysView{grid.offsets, grid.connectivity, grid.types},
+                   std::move(grid.fields), source);
+}
+
+Mesh buildMesh(UninitVector<Vec3f> &&points, CellArraysView cells, std::vector<ScalarField> &&fields,
+               const std::string &source) {
+  return groupAndBuild(std::move(points), cells, std::move(fields), source);
+}
+
+Mesh buildMesh(UninitVector<Vec3f> &&points, CellBuffers &&cells, std::vector<ScalarField> &&fields,
+               const std::string &source) {
+  const CellArrays<uint32_t> grid = cells.view();
+  const size_t cellCount = grid.types.size();
+  checkSpan(grid, source);
+  const int slot = points.size() <= UINT32_MAX ? backToBackSlot(grid, points.size()) : -1;
+  if (slot < 0)
+    return groupAndBuild(std::move(points), grid, std::move(fields), source);
+  checkFieldSizes(fields, cellCount, points.size(), source);
+  TypeArrays types;
+  types.cells[size_t(slot)] = std::move(cells.connectivity);
+  types.counts[size_t(slot)] = cellCount;
+  return windAndOrder(std::move(points), std::move(types), std::move(fields), 0);
+}
 
 } // namespace uvr

@@ -79,10 +79,24 @@ template <typename Index> struct CellArrays {
 };
 using CellArraysView = CellArrays<int64_t>;
 
-/// buildMesh over cells viewed in place; the offsets are checked against the connectivity. For int64_t and
-/// uint32_t point indices.
-template <typename Index>
-Mesh buildMesh(UninitVector<Vec3f> &&points, CellArrays<Index> cells, std::vector<ScalarField> &&fields,
+/// buildMesh over cells viewed in place; the offsets are checked against the connectivity.
+Mesh buildMesh(UninitVector<Vec3f> &&points, CellArraysView cells, std::vector<ScalarField> &&fields,
+               const std::string &source);
+
+/// Cell arrays that a reader hands over to buildMesh, point indices narrowed to 32 bits as they were read
+/// (half the memory to write and read again).
+struct CellBuffers {
+  Buffer<int64_t> offsets; ///< cell count + 1 entries, offsets[0] == 0
+  Buffer<uint32_t> connectivity;
+  Buffer<uint8_t> types;
+
+  CellArrays<uint32_t> view() const { return {offsets, connectivity, types}; }
+};
+
+/// buildMesh over cell arrays handed over. When all cells are of one linear volume type, back to back in the
+/// connectivity (a tetrahedral mesh, say), the connectivity becomes that type's cell array as it is: there is
+/// nothing to group or copy.
+Mesh buildMesh(UninitVector<Vec3f> &&points, CellBuffers &&cells, std::vector<ScalarField> &&fields,
                const std::string &source);
 
 /// Sorts each cell type's cells along a Morton curve through their centroids and numbers the points by first

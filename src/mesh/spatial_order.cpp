@@ -107,9 +107,11 @@ void FirstUseNumbering::renumberAfterFirstHalf(uint32_t *corners, size_t count,
   // The second half's points in the order it first used them, then the number each gets overall: its own
   // number where the first half did not use it.
   Buffer<uint32_t> overall(ownPoints);
-  for (size_t point = 0; point < ownIndex.size(); ++point)
-    if (ownIndex[point] != kUnused)
-      overall[ownIndex[point]] = uint32_t(point);
+  parallelChunks(ownIndex.size(), 1 << 16, [&](size_t begin, size_t end) {
+    for (size_t point = begin; point < end; ++point)
+      if (ownIndex[point] != kUnused)
+        overall[ownIndex[point]] = uint32_t(point);
+  });
   for (uint32_t &number : overall) {
     uint32_t &index = newIndex_[number];
     if (index == kUnused)
@@ -126,9 +128,11 @@ void FirstUseNumbering::reorderPoints(Mesh &mesh) {
   for (uint32_t &index : newIndex_)
     if (index == kUnused)
       index = next_++;
-  Buffer<uint32_t> order(newIndex_.size());
-  for (size_t i = 0; i < order.size(); ++i)
-    order[newIndex_[i]] = uint32_t(i);
+  Buffer<uint32_t> order(newIndex_.size()); // the inverse permutation, written in parallel
+  parallelChunks(order.size(), 1 << 16, [&](size_t begin, size_t end) {
+    for (size_t i = begin; i < end; ++i)
+      order[newIndex_[i]] = uint32_t(i);
+  });
   permute(mesh.points, order);
   for (ScalarField &field : mesh.fields)
     if (field.centering == Centering::Point)

@@ -63,11 +63,14 @@ Buffer<uint32_t> sortedOrder(Buffer<uint64_t> &keys);
 
 /// Item i of `items` becomes item order[i] of `source` (item i where `order` is empty: in order already), for
 /// `count` items of `Stride` elements (a constant, so that an item's copy is a few moves and no memmove
-/// call); in parallel.
+/// call); in parallel. The order jumps all over `source`, so the loop asks for a later item early.
 template <size_t Stride, typename T>
 void gather(T *items, const T *source, size_t count, std::span<const uint32_t> order) {
   tbb::parallel_for(tbb::blocked_range<size_t>(0, count, 1 << 12), [&](const tbb::blocked_range<size_t> &r) {
+    constexpr size_t kPrefetchItems = 32;
     for (size_t i = r.begin(); i < r.end(); ++i) {
+      if (!order.empty() && i + kPrefetchItems < r.end())
+        __builtin_prefetch(source + size_t(order[i + kPrefetchItems]) * Stride);
       const size_t from = order.empty() ? i : size_t(order[i]);
       for (size_t k = 0; k < Stride; ++k)
         items[i * Stride + k] = source[from * Stride + k];
@@ -112,15 +115,20 @@ private:
   static constexpr size_t kSplitCells = size_t(1) << 16;
 
   /// Places cells [begin, end), numbering points not in `newIndex` yet from `next` on; returns the next
-  /// number. The source cells of later places are prefetched, since the order jumps all over them.
+  /// number. The order jumps all over the source cells, and their points' numbers are as scattered: the loop
+  /// asks for a later cell's corners early, and for their numbers once those corners have arrived.
   template <size_t Corners>
   static uint32_t number(uint32_t *cells, const uint32_t *source, std::span<const uint32_t> order,
                          size_t begin, size_t end, uint32_t *newIndex, uint32_t next) {
     constexpr size_t kPrefetchCells = 16;
+    auto sourceCell = [&](size_t i) { return source + (order.empty() ? i : size_t(order[i])) * Corners; };
     for (size_t i = begin; i < end; ++i) {
-      if (i + kPrefetchCells < order.size())
-        __builtin_prefetch(source + size_t(order[i + kPrefetchCells]) * Corners);
-      const uint32_t *from = source + (order.empty() ? i : size_t(order[i])) * Corners;
+      if (i + 2 * kPrefetchCells < end)
+        __builtin_prefetch(sourceCell(i + 2 * kPrefetchCells));
+      if (i + kPrefetchCells < end)
+        for (size_t k = 0; k < Corners; ++k)
+          __builtin_prefetch(newIndex + sourceCell(i + kPrefetchCells)[k]);
+      const uint32_t *from = sourceCell(i);
       for (size_t k = 0; k < Corners; ++k) {
         uint32_t &index = newIndex[from[k]];
         if (index == kUnused)
