@@ -537,7 +537,7 @@ PYBIND11_MODULE(uvr, m) {
       .def(py::init<std::shared_ptr<PyMesh>, const std::optional<std::string> &, const std::string &,
                     uint32_t>(),
            py::arg("mesh"), py::arg("field") = py::none(), py::arg("backend") = "cpu",
-           py::arg("leaf_size") = kBackendLeafSize)
+           py::arg("leaf_size") = kAutoLeafSize)
       .def("render", &PyRenderer::render, py::arg("camera") = py::none(), py::arg("tf") = py::none(),
            py::arg("mode") = "full", py::arg("s1") = py::none(), py::arg("s2") = py::none(),
            py::arg("p") = py::none(), py::arg("unit") = py::none(),

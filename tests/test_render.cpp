@@ -319,19 +319,17 @@ TEST(Camera, ResetCameraFitsTheBoundingSphereInBothAngles) {
   }
 }
 
-// Each backend builds its own default partitions unless a leaf size is given, and the CPU's count follows it.
-TEST(Renderer, LeafSizeIsEachBackendsDefaultUnlessGiven) {
-  EXPECT_EQ(defaultLeafSize(Backend::Cpu, 1'000'000'000), kDefaultLeafSize);
-  EXPECT_EQ(defaultLeafSize(Backend::Cuda, 1000), kDefaultLeafSize);
-  EXPECT_EQ(defaultLeafSize(Backend::Cuda, 300'000'000), 300'000'000 / kDefaultGpuPartitions);
+// Partitions of the default size unless a leaf size is given, and the CPU's count follows it.
+TEST(Renderer, LeafSizeIsTheDefaultUnlessGiven) {
+  EXPECT_EQ(defaultLeafSize(1000), kSmallestDefaultLeafSize);
+  EXPECT_EQ(defaultLeafSize(300'000'000), 300'000'000 / kDefaultPartitions);
+  EXPECT_EQ(defaultLeafSize(uint64_t(1) << 50), UINT32_MAX);
   const Mesh mesh = buildMesh(
       makeBoxGrid(CellType::Tetra, 8, {{0.f, 0.f, 0.f}, {1.f, 1.f, 1.f}}, [](Vec3f p) { return p.x; }),
       "box");
   const Renderer byDefault(mesh, mesh.findField("f"));
-  EXPECT_EQ(byDefault.leafSize(Backend::Cpu), kDefaultLeafSize);
-  EXPECT_EQ(byDefault.leafSize(Backend::Cuda), defaultLeafSize(Backend::Cuda, mesh.cellCount()));
+  EXPECT_EQ(byDefault.leafSize(), defaultLeafSize(mesh.cellCount()));
   const Renderer given(mesh, mesh.findField("f"), 7);
-  EXPECT_EQ(given.leafSize(Backend::Cpu), 7u);
-  EXPECT_EQ(given.leafSize(Backend::Cuda), 7u);
+  EXPECT_EQ(given.leafSize(), 7u);
   EXPECT_GT(given.partitionCount(Backend::Cpu), byDefault.partitionCount(Backend::Cpu));
 }

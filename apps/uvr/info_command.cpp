@@ -39,7 +39,9 @@ void runInfo(const InfoOptions &o) {
   const VolumeStats volumes = volumeStats(mesh);
   const Box3f bounds = mesh.bounds();
   const uint32_t partitions =
-      mesh.cellCount() > 0 ? buildPartitions(makeMeshView(mesh, -1), kDefaultLeafSize).count() : 0;
+      mesh.cellCount() > 0
+          ? buildPartitions(makeMeshView(mesh, -1), defaultLeafSize(mesh.cellCount())).count()
+          : 0;
 
   nlohmann::json fields = nlohmann::json::array();
   for (const ScalarField &field : mesh.fields) {
@@ -101,7 +103,7 @@ void runInfo(const InfoOptions &o) {
   std::printf("  volume spread   max/min %g, p99/p1 %g (p1 %g, p99 %g)\n",
               volumes.min > 0 ? volumes.max / volumes.min : INFINITY,
               volumes.p1 > 0 ? volumes.p99 / volumes.p1 : INFINITY, volumes.p1, volumes.p99);
-  std::printf("  partitions      %u (leaf size %u)\n", partitions, kDefaultLeafSize);
+  std::printf("  partitions      %u (leaf size %u)\n", partitions, defaultLeafSize(mesh.cellCount()));
   std::printf("  time steps      %d (showing %d)\n", timeSteps, o.timeStep);
   std::printf("  load            %.1f ms (cpu %.1f ms)\n", loadMs, loadCpuMs);
 }

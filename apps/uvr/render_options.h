@@ -21,7 +21,7 @@ struct RenderOptions {
   std::vector<float> range;
   std::string mode = "full";
   float s1 = 0.f, s2 = 0.f, p = 0.f, unit = 0.f;
-  uint32_t leafSize = kBackendLeafSize;
+  uint32_t leafSize = kAutoLeafSize;
   std::string size = "1024x1024";
   std::string eye, at, up;
   float fovy = 30.f;

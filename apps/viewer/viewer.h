@@ -16,7 +16,7 @@ struct ViewerSetup {
   const Mesh *mesh = nullptr;
   std::string meshPath;
   int fieldIndex = 0;
-  uint32_t leafSize = kBackendLeafSize;
+  uint32_t leafSize = kAutoLeafSize;
   float defaultStep = 1.f;       ///< defaultStepSize of the mesh: what s1 = 0 etc. mean
   Camera camera;                 ///< the starting camera
   RenderSettings settings;       ///< size of the image region, background, sampling

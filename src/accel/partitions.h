@@ -47,13 +47,20 @@ struct Partitions {
 /// Median-split KD-tree over cell centroids until a leaf holds at most `leafSize` cells.
 Partitions buildPartitions(const MeshView &mesh, uint32_t leafSize);
 
-/// Default `leafSize` on the CPU: measured on the brain meshes (see README, "Choosing defaults").
-constexpr uint32_t kDefaultLeafSize = 64;
-/// On the GPU a partition costs more than a few samples (a warp waits for its slowest ray's traversal), so
-/// partitions are larger there: the cell count over this many cells each, at least kDefaultLeafSize (the
-/// median splits make 1-2 times as many leaves). Measured on the brain meshes of 857k to 298M tets
-/// (docs/results/gpu_h200.md); much fewer partitions leave the colour variance too coarse for the steps.
-constexpr uint64_t kDefaultGpuPartitions = 512;
+/// The default `leafSize` makes about this many partitions (the median splits make 1-2 times as many leaves),
+/// of at least kSmallestDefaultLeafSize cells. Measured on the brain meshes of 857k to 298M tets, on both
+/// backends (README, "Choosing defaults"): a partition costs more than a few samples (its traversal; on a
+/// GPU a warp waits for its slowest ray's), and much fewer partitions leave the colour variance too coarse
+/// for the step sizes.
+constexpr uint64_t kDefaultPartitions = 512;
+constexpr uint32_t kSmallestDefaultLeafSize = 64;
+
+/// The default leaf size for a mesh of `cells` cells.
+inline uint32_t defaultLeafSize(uint64_t cells) {
+  const uint64_t size = cells / kDefaultPartitions;
+  return uint32_t(size < kSmallestDefaultLeafSize ? kSmallestDefaultLeafSize
+                                                  : (size > UINT32_MAX ? UINT32_MAX : size));
+}
 
 // The steps of the build that the host's and the GPU's share, so that both make the same partitions.
 

@@ -74,7 +74,7 @@ nlohmann::json frameStats(const Mesh &mesh, const Renderer &renderer, const Rend
       {"s2", is.s2},
       {"p", is.p},
       {"unit", is.unit},
-      {"leaf_size", renderer.leafSize(settings.backend)},
+      {"leaf_size", renderer.leafSize()},
       {"field", mesh.fields[size_t(fieldIndex)].name},
       {"range", {renderer.transferFunction().valueMin(), renderer.transferFunction().valueMax()}},
       {"backend", backendName(settings.backend)},

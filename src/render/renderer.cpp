@@ -64,7 +64,7 @@ const HostAcceleration &Renderer::host() const {
     built->tetNeighbors = buildTetNeighbors(mesh_);
     built->seeds =
         buildSeedGrid(meshView_, built->tetNeighbors.empty() ? nullptr : built->tetNeighbors.data());
-    built->partitions = buildPartitions(meshView_, leafSize(Backend::Cpu));
+    built->partitions = buildPartitions(meshView_, leafSize());
     hostBuildMs_ = timer.milliseconds();
     host_ = std::move(built);
   }
@@ -124,7 +124,7 @@ void Renderer::prepare(Backend backend) const {
   if (cuda_)
     return;
 #ifdef UVR_HAVE_CUDA
-  cuda_ = std::make_shared<CudaRenderer>(meshView_, mesh_.points.size(), leafSize(Backend::Cuda));
+  cuda_ = std::make_shared<CudaRenderer>(meshView_, mesh_.points.size(), leafSize());
   if (tf_)
     cuda_->setTransferFunction(*tf_);
 #else
@@ -132,14 +132,8 @@ void Renderer::prepare(Backend backend) const {
 #endif
 }
 
-uint32_t defaultLeafSize(Backend backend, uint64_t cells) {
-  if (backend == Backend::Cpu)
-    return kDefaultLeafSize;
-  return uint32_t(std::clamp<uint64_t>(cells / kDefaultGpuPartitions, kDefaultLeafSize, UINT32_MAX));
-}
-
-uint32_t Renderer::leafSize(Backend backend) const {
-  return leafSize_ != kBackendLeafSize ? leafSize_ : defaultLeafSize(backend, mesh_.cellCount());
+uint32_t Renderer::leafSize() const {
+  return leafSize_ != kAutoLeafSize ? leafSize_ : defaultLeafSize(mesh_.cellCount());
 }
 
 uint32_t Renderer::partitionCount(Backend backend) const {

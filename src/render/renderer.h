@@ -24,10 +24,8 @@ enum class Backend : uint8_t { Cpu, Cuda };
 
 const char *backendName(Backend backend);
 
-/// A leaf size that asks for each backend's own default (defaultLeafSize).
-constexpr uint32_t kBackendLeafSize = 0;
-/// The most cells per partition that `backend` builds with by default for a mesh of `cells` cells.
-uint32_t defaultLeafSize(Backend backend, uint64_t cells);
+/// A leaf size that asks for the default (defaultLeafSize).
+constexpr uint32_t kAutoLeafSize = 0;
 /// Parses cpu|cuda; throws uvr::Error otherwise, and for cuda when this build has no CUDA backend.
 Backend parseBackend(const std::string &name);
 
@@ -73,9 +71,9 @@ class Renderer {
 public:
   /// Renders field `fieldIndex` of `mesh`, which must outlive the renderer. The acceleration data (tet
   /// adjacency, point-location hierarchy, occupancy and seed grids, partitions of up to `leafSize` cells) is
-  /// built where a backend first needs it: on the host for the CPU, on the GPU for CUDA. kBackendLeafSize
-  /// leaves the leaf size to each backend.
-  Renderer(const Mesh &mesh, int fieldIndex, uint32_t leafSize = kBackendLeafSize);
+  /// built where a backend first needs it: on the host for the CPU, on the GPU for CUDA. kAutoLeafSize
+  /// asks for defaultLeafSize.
+  Renderer(const Mesh &mesh, int fieldIndex, uint32_t leafSize = kAutoLeafSize);
   ~Renderer();
 
   /// Replaces the transfer function and recomputes the partitions' metadata, on the GPU once CUDA has been
@@ -99,8 +97,8 @@ public:
   /// The host's partitions, built on first use.
   const Partitions &partitions() const;
   uint32_t partitionCount(Backend backend) const;
-  /// The most cells per partition that `backend` builds with.
-  uint32_t leafSize(Backend backend) const;
+  /// The most cells per partition, as given or by default.
+  uint32_t leafSize() const;
   /// Milliseconds the acceleration build for `backend` took (on the GPU for CUDA, the mesh's upload
   /// excluded); 0 before it was prepared.
   double buildMs(Backend backend) const;
