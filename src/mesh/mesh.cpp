@@ -433,8 +433,10 @@ int backToBackSlot(const CellArrays<uint32_t> &grid, size_t pointCount) {
                         return;
                       // Without early exits, so that the loops vectorise.
                       bool ok = true;
-                      for (size_t c = r.begin(); c < r.end(); ++c)
-                        ok &= (grid.types[c] == type) & (uint64_t(grid.offsets[c + 1]) == (c + 1) * corners);
+                      for (size_t c = r.begin(); c < r.end(); ++c) {
+                        ok &= grid.types[c] == type;
+                        ok &= uint64_t(grid.offsets[c + 1]) == (c + 1) * corners;
+                      }
                       for (size_t i = r.begin() * corners; i < r.end() * corners; ++i)
                         ok &= grid.connectivity[i] < pointCount;
                       if (!ok)
