@@ -1,7 +1,5 @@
 #include "accel/occupancy_build.h"
 
-#include "core/parallel_bounds.h"
-
 #include <tbb/parallel_for.h>
 
 #include <atomic>
@@ -13,8 +11,7 @@ OccupancyGrid buildOccupancyGrid(const MeshView &mesh, float voxelsPerCell) {
   if (cells == 0)
     return {};
   OccupancyGrid grid;
-  grid.grid = placeVoxelGrid(parallelBounds(cells, [&](uint64_t c) { return cellBounds(mesh, c); }), cells,
-                             voxelsPerCell);
+  grid.grid = placeVoxelGrid(mesh, voxelsPerCell);
   grid.bits.assign(grid.wordCount(), 0);
   tbb::parallel_for(uint64_t(0), cells, [&](uint64_t c) {
     markCell(mesh, c, grid.grid, [&](uint64_t w, uint64_t mask) {

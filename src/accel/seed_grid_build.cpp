@@ -1,5 +1,4 @@
 #include "accel/seed_grid.h"
-#include "core/parallel_bounds.h"
 
 #include <tbb/parallel_for.h>
 
@@ -54,8 +53,7 @@ SeedGrid buildSeedGrid(const MeshView &mesh, const uint32_t *tetNeighbors, float
   if (cells == 0)
     return {};
   SeedGrid grid;
-  grid.grid = placeVoxelGrid(parallelBounds(cells, [&](uint64_t c) { return cellBounds(mesh, c); }), cells,
-                             voxelsPerCell);
+  grid.grid = placeVoxelGrid(mesh, voxelsPerCell);
   grid.seeds.assign(grid.grid.voxelCount(), kNoCell);
   tbb::parallel_for(uint64_t(0), cells, [&](uint64_t c) {
     forEachSeededVoxel(mesh, c, grid.grid, [&](uint64_t voxel) {

@@ -1,4 +1,6 @@
 #include "accel/voxel_grid.h"
+#include "core/parallel_bounds.h"
+#include "mesh/cell.h"
 
 #include <algorithm>
 #include <cmath>
@@ -22,6 +24,12 @@ VoxelGrid placeVoxelGrid(const Box3f &bounds, uint64_t cells, float voxelsPerCel
                         size.z > 0.f ? float(grid.nz) / size.z : 0.f};
   grid.voxelSize = {size.x / float(grid.nx), size.y / float(grid.ny), size.z / float(grid.nz)};
   return grid;
+}
+
+VoxelGrid placeVoxelGrid(const MeshView &mesh, float voxelsPerCell) {
+  const uint64_t cells = mesh.cellCount();
+  return placeVoxelGrid(parallelBounds(cells, [&](uint64_t c) { return cellBounds(mesh, c); }), cells,
+                        voxelsPerCell);
 }
 
 } // namespace uvr

@@ -41,4 +41,8 @@ struct VoxelGrid {
 /// so that a grid stays a small fraction of the mesh's memory.
 VoxelGrid placeVoxelGrid(const Box3f &bounds, uint64_t cells, float voxelsPerCell);
 
+struct MeshView;
+/// The same over the box of `mesh`'s cells, reduced on the host's cores.
+VoxelGrid placeVoxelGrid(const MeshView &mesh, float voxelsPerCell);
+
 } // namespace uvr
