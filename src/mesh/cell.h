@@ -117,10 +117,11 @@ UVR_HOST_DEVICE inline bool insideReference(Vec3f r, int n) {
   return n == 6 ? inCube && r.x + r.y <= hi : inCube;
 }
 
-/// Inverts x(r) = sum_i N_i(r) p_i by Newton's method; on success `s` holds the weights at `p`.
+/// Inverts x(r) = sum_i N_i(r) p_i by Newton's method: the parametric coordinates `r` of `p`; false where `p`
+/// lies outside the cell's box, the iteration runs far outside the reference cell, or the cell is degenerate.
+/// The caller tells inside from outside (insideReference).
 template <int N>
-UVR_HOST_DEVICE inline bool isoparametricWeights(const Vec3f *points, const uint32_t *v, Vec3f p,
-                                                 ShapeFunctions<N> &s) {
+UVR_HOST_DEVICE inline bool parametricCoordinates(const Vec3f *points, const uint32_t *v, Vec3f p, Vec3f &r) {
   Vec3f corner[N];
   Vec3f lower = points[v[0]], upper = points[v[0]];
   for (int i = 0; i < N; ++i) {
@@ -137,7 +138,8 @@ UVR_HOST_DEVICE inline bool isoparametricWeights(const Vec3f *points, const uint
       p.y > upper.y + slack || p.z > upper.z + slack)
     return false;
 
-  Vec3f r{1.f / 3.f, 1.f / 3.f, 0.5f}; // inside all three reference cells, away from the pyramid's apex
+  ShapeFunctions<N> s; // the iteration's own: the caller evaluates the weights once, where it needs them
+  r = {1.f / 3.f, 1.f / 3.f, 0.5f}; // inside all three reference cells, away from the pyramid's apex
   for (int iteration = 0; iteration < 16; ++iteration) {
     evaluateShape(r, s);
     Vec3f residual = Vec3f{} - p;
@@ -171,7 +173,15 @@ UVR_HOST_DEVICE inline bool isoparametricWeights(const Vec3f *points, const uint
     r.x = clampf(r.x, 0.f, 1.f);
     r.y = clampf(r.y, 0.f, 1.f);
   }
-  if (!insideReference(r, N))
+  return true;
+}
+
+/// The shape functions' weights at `p` into `s`; false where `p` lies outside the cell.
+template <int N>
+UVR_HOST_DEVICE inline bool isoparametricWeights(const Vec3f *points, const uint32_t *v, Vec3f p,
+                                                 ShapeFunctions<N> &s) {
+  Vec3f r;
+  if (!parametricCoordinates<N>(points, v, p, r) || !insideReference(r, N))
     return false;
   evaluateShape(r, s);
   return true;
@@ -191,16 +201,18 @@ UVR_HOST_DEVICE inline CellType cellType(const MeshView &mesh, uint64_t cell) {
 template <int N>
 UVR_HOST_DEVICE inline bool sampleIsoparametric(const MeshView &mesh, const uint32_t *v, uint64_t cell,
                                                 Vec3f p, float &value) {
-  ShapeFunctions<N> s;
-  if (!isoparametricWeights<N>(mesh.points, v, p, s))
+  Vec3f r;
+  if (!parametricCoordinates<N>(mesh.points, v, p, r) || !insideReference(r, N))
     return false;
   if (mesh.cellCentered) {
     value = mesh.values[cell];
-  } else {
-    value = 0.f;
-    for (int i = 0; i < N; ++i)
-      value += s.value[i] * mesh.values[v[i]];
+    return true;
   }
+  ShapeFunctions<N> s;
+  evaluateShape(r, s);
+  value = 0.f;
+  for (int i = 0; i < N; ++i)
+    value += s.value[i] * mesh.values[v[i]];
   return true;
 }
 
