@@ -390,7 +390,7 @@ struct VtuGrid {
 
 class VtuReader {
 public:
-  explicit VtuReader(const std::string &path) : path_(path), file_(readFile(path)) {}
+  explicit VtuReader(const std::string &path) : path_(path), file_(path) {}
 
   VtuGrid read() {
     parseXml();
@@ -423,7 +423,7 @@ private:
     fail(byte, "DataArray '" + array.name + "': " + what);
   }
 
-  const char *fileChars() const { return reinterpret_cast<const char *>(file_.data.data()); }
+  const char *fileChars() const { return reinterpret_cast<const char *>(file_.data()); }
 
   uint64_t position(pugi::xml_node node) const {
     return uint64_t(std::max<ptrdiff_t>(node.offset_debug(), 0));
@@ -431,13 +431,14 @@ private:
   uint64_t position(const char *xmlText) const { return uint64_t(xmlText - xmlBase_); }
 
   void parseXml() {
-    std::string_view all(fileChars(), file_.size);
+    std::string_view all(fileChars(), file_.size());
     constexpr unsigned options = pugi::parse_default & ~pugi::parse_eol; // keeps text where it is in the file
     size_t tag = all.find("<AppendedData");
     pugi::xml_parse_result result;
     if (tag == std::string_view::npos) {
-      xmlBase_ = fileChars();
-      result = doc_.load_buffer_inplace(file_.data.data(), file_.size, options, pugi::encoding_utf8);
+      head_ = std::string(all); // pugixml writes into the text it parses, and the mapping is read-only
+      xmlBase_ = head_.data();
+      result = doc_.load_buffer_inplace(head_.data(), head_.size(), options, pugi::encoding_utf8);
     } else {
       size_t tagEnd = all.find('>', tag);
       if (tagEnd == std::string_view::npos)
@@ -447,7 +448,7 @@ private:
         ++marker;
       if (marker == all.size() || all[marker] != '_')
         fail(marker, "expected '_' at the start of the appended data");
-      appended_ = file_.data.data() + marker + 1;
+      appended_ = file_.data() + marker + 1;
       head_ = std::string(all.substr(0, tagEnd + 1)) + "</AppendedData></VTKFile>";
       xmlBase_ = head_.data();
       result = doc_.load_buffer_inplace(head_.data(), head_.size(), options, pugi::encoding_utf8);
@@ -542,7 +543,7 @@ private:
       begin = reinterpret_cast<const uint8_t *>(array.text.data());
       end = begin + array.text.size();
     } else {
-      end = file_.data.data() + file_.size;
+      end = file_.data() + file_.size();
       if (array.offset > uint64_t(end - appended_))
         fail(array, array.position,
              "offset " + std::to_string(array.offset) + " is past the end of the file");
@@ -550,7 +551,7 @@ private:
       base64 = appendedBase64_;
     }
     const uint8_t *fileStart =
-        array.format == Format::Binary ? reinterpret_cast<const uint8_t *>(xmlBase_) : file_.data.data();
+        array.format == Format::Binary ? reinterpret_cast<const uint8_t *>(xmlBase_) : file_.data();
     ByteStream stream(begin, end, base64);
     const std::string endsFirst =
         array.format == Format::Binary ? " but its text ends first" : " but the file ends first";
@@ -940,8 +941,9 @@ private:
   }
 
   std::string path_;
-  FileBuffer file_;
-  std::string head_; ///< the XML before the appended data, closed off
+  MappedFile file_;
+  std::string
+      head_; ///< the XML parsed in place: the whole file, or the part before the appended data closed off
   const char *xmlBase_ = "";
   pugi::xml_document doc_;
   const uint8_t *appended_ = nullptr; ///< first byte after the '_' marker
