@@ -206,6 +206,7 @@ namespace {
 struct TypeArrays {
   std::array<Buffer<uint32_t>, 4> cells;
   std::array<uint64_t, 4> counts{};
+  std::array<Buffer<uint64_t>, 4> keys; ///< room for each type's sort keys, where it is already at hand
 };
 
 template <typename Index> void checkSpan(const CellArrays<Index> &grid, const std::string &source) {
@@ -262,10 +263,11 @@ Mesh windAndOrder(UninitVector<Vec3f> &&points, TypeArrays &&types, std::vector<
 
   // Winding and keys in a pass over each type array. Files seldom list cells in spatial order, so the
   // corners' points are loaded from all over memory: the loop asks for those of a later cell early.
-  std::array<Buffer<uint64_t>, 4> typeKeys;
+  std::array<Buffer<uint64_t>, 4> &typeKeys = types.keys;
   auto windAndKey = [&]<CellType Type, int Corners>(size_t s) {
     constexpr size_t kPrefetchCells = 16;
-    typeKeys[s] = Buffer<uint64_t>(perType[s]);
+    if (typeKeys[s].size() != perType[s])
+      typeKeys[s] = Buffer<uint64_t>(perType[s]);
     return tbb::parallel_reduce(
         tbb::blocked_range<size_t>(0, perType[s], 1 << 12), uint64_t(0),
         [&](const tbb::blocked_range<size_t> &r, uint64_t inverted) {
@@ -469,6 +471,8 @@ Mesh buildMesh(UninitVector<Vec3f> &&points, CellBuffers &&cells, std::vector<Sc
   TypeArrays types;
   types.cells[size_t(slot)] = std::move(cells.connectivity);
   types.counts[size_t(slot)] = cellCount;
+  // The offsets are done with, and one longer than the keys.
+  types.keys[size_t(slot)] = std::move(cells.offsets).reuseAs<uint64_t>(cellCount);
   return windAndOrder(std::move(points), std::move(types), std::move(fields), 0);
 }
 
