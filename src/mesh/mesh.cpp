@@ -171,6 +171,15 @@ template <typename Index> bool outside(Index id, uint64_t pointCount) {
   return uint64_t(int64_t(id)) >= pointCount;
 }
 
+/// orientCell for a type known at compile time: inlined into the loops over millions of cells, with the
+/// type's own arithmetic alone.
+template <CellType Type> bool orient(uint32_t *v, std::span<const Vec3f> points) {
+  if (windingSign(Type, v, points) >= 0.f)
+    return false;
+  reverseWinding(Type, v);
+  return true;
+}
+
 constexpr CellKind kSlotKinds[4] = {
     {CellType::Tetra, 4}, {CellType::Pyramid, 5}, {CellType::Wedge, 6}, {CellType::Hexahedron, 8}};
 
@@ -276,7 +285,7 @@ Mesh windAndOrder(UninitVector<Vec3f> &&points, TypeArrays &&types, std::vector<
             if (c + kPrefetchCells < r.end())
               for (int i = 0; i < Corners; ++i)
                 __builtin_prefetch(&mesh.points[v[kPrefetchCells * Corners + i]]);
-            inverted += orientCell(Type, v, mesh.points);
+            inverted += orient<Type>(v, mesh.points);
             typeKeys[s][c] = cellKeys.key(v, Corners, mesh.points, c);
           }
           return inverted;
