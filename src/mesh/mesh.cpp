@@ -6,7 +6,6 @@
 
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
-#include <tbb/task_group.h>
 
 #include <algorithm>
 #include <array>
@@ -300,19 +299,16 @@ Mesh windAndOrder(UninitVector<Vec3f> &&points, TypeArrays &&types, std::vector<
   std::array<Buffer<uint32_t>, 4> orders;
   for (size_t s = 0; s < 4; ++s)
     orders[s] = sortedOrder(typeKeys[s]);
-  // The cells are placed in a serial pass (see FirstUseNumbering), the cell fields meanwhile on the other
-  // threads.
-  tbb::task_group cellFields;
-  cellFields.run([&] {
-    for (ScalarField &field : fields) {
-      if (field.centering == Centering::Cell) {
-        UninitVector<float> sorted(keptCells);
-        for (size_t s = 0; s < 4; ++s)
-          gather<1>(sorted.data() + firstCell[s], field.values.data() + firstCell[s], perType[s], orders[s]);
-        field.values = std::move(sorted);
-      }
+  // The cell fields before the cells: placing the cells takes one thread for each half of them (see
+  // FirstUseNumbering), and a gather beside them would hold up one half while the other thread waits.
+  for (ScalarField &field : fields) {
+    if (field.centering == Centering::Cell) {
+      UninitVector<float> sorted(keptCells);
+      for (size_t s = 0; s < 4; ++s)
+        gather<1>(sorted.data() + firstCell[s], field.values.data() + firstCell[s], perType[s], orders[s]);
+      field.values = std::move(sorted);
     }
-  });
+  }
   FirstUseNumbering numbering(mesh.points.size());
   auto placeCells = [&]<size_t Corners>(size_t s, UninitVector<uint32_t> &cells) {
     cells.resize(perType[s] * Corners);
@@ -322,7 +318,6 @@ Mesh windAndOrder(UninitVector<Vec3f> &&points, TypeArrays &&types, std::vector<
   placeCells.template operator()<5>(1, mesh.pyramids);
   placeCells.template operator()<6>(2, mesh.wedges);
   placeCells.template operator()<8>(3, mesh.hexes);
-  cellFields.wait();
   mesh.fields = std::move(fields);
   numbering.reorderPoints(mesh);
   return mesh;
