@@ -152,11 +152,14 @@ template <typename Dst> struct CastTo {
 /// again in half the memory. An index outside [0, pointCount), as VTK's 64-bit value, becomes kOutside.
 struct NarrowPointIndex {
   static constexpr uint32_t kOutside = UINT32_MAX;
-  uint64_t pointCount;
+  uint32_t pointCount;
 
+  /// By the index's 32-bit halves (a negative one's high half is not 0) and selects without branches: the
+  /// loop over 64-bit indices then vectorises, where SSE2 has no 64-bit compare.
   template <typename Value> uint32_t operator()(Value value) const {
-    const auto index = static_cast<int64_t>(value);
-    return index >= 0 && uint64_t(index) < pointCount ? uint32_t(index) : kOutside;
+    const auto index = uint64_t(static_cast<int64_t>(value));
+    const auto low = uint32_t(index), high = uint32_t(index >> 32);
+    return (high | uint32_t(low >= pointCount)) == 0 ? low : kOutside;
   }
 };
 
@@ -185,10 +188,11 @@ template <typename Dst, typename To>
 void convert(ScalarType type, bool swap, const uint8_t *src, uint64_t count, Dst *dst, const To &to) {
   visitType(type, [&](auto zero) {
     using Src = decltype(zero);
+    const To local = to; // whose members no write to dst can change: the loop need not load them again
     for (uint64_t i = 0; i < count; ++i) {
       Src value;
       std::memcpy(&value, src + i * sizeof(Src), sizeof(Src));
-      dst[i] = to(swap ? byteSwapped(value) : value);
+      dst[i] = local(swap ? byteSwapped(value) : value);
     }
   });
 }
@@ -763,11 +767,12 @@ private:
     LeastIndex firstBad(count);
     forEachRun(array, payload, sizeOf(array.type), [&](const uint8_t *bytes, uint64_t first, uint64_t n) {
       convert(array.type, swap_, bytes, n, out + first, to);
+      // Whether any value is bad, without an early exit, so that the loop vectorises; which one, only then.
+      unsigned anyBad = 0; // not a bool, whose |= does not vectorise
       for (uint64_t i = first; i < first + n; ++i)
-        if (bad(out[i])) {
-          firstBad.note(i);
-          break;
-        }
+        anyBad |= unsigned(bad(out[i]));
+      if (anyBad)
+        firstBad.note(uint64_t(std::find_if(out + first, out + first + n, bad) - out));
     });
     return firstBad.least();
   }
@@ -840,7 +845,7 @@ private:
       Payload indices = prepare(connectivity, connectivityCount);
       grid.connectivity = Buffer<uint32_t>(connectivityCount);
       bad = fill(connectivity, indices, connectivityCount, grid.connectivity.data(),
-                 NarrowPointIndex{pointCount},
+                 NarrowPointIndex{uint32_t(pointCount)},
                  [](uint32_t index) { return index == NarrowPointIndex::kOutside; });
       if (bad < connectivityCount) // named by its value in the file, read again
         fail(connectivity, connectivity.position,
