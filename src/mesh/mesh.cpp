@@ -420,7 +420,7 @@ Mesh groupAndBuild(UninitVector<Vec3f> &&points, CellArrays<Index> grid, std::ve
 
 /// The slot of the one linear volume type of all cells, when they lie back to back in the connectivity (cell
 /// c's corners from entry c * corners on) and name points that exist: the connectivity is then that type's
-/// cell array as it is, and the cells are in type order. -1 otherwise.
+/// cell array as it is, and the cells are in type order. -1 otherwise. For at most 2^32 - 1 points.
 int backToBackSlot(const CellArrays<uint32_t> &grid, size_t pointCount) {
   const size_t cellCount = grid.types.size();
   CellKind kind;
@@ -432,20 +432,23 @@ int backToBackSlot(const CellArrays<uint32_t> &grid, size_t pointCount) {
   const auto corners = uint64_t(kind.corners);
   if (uint64_t(grid.offsets[cellCount]) != cellCount * corners) // else the connectivity may be shorter
     return -1;
+  const auto points = uint32_t(pointCount);
   std::atomic<bool> backToBack = true;
   tbb::parallel_for(tbb::blocked_range<size_t>(0, cellCount, size_t(1) << 16),
                     [&](const tbb::blocked_range<size_t> &r) {
                       if (!backToBack.load(std::memory_order_relaxed))
                         return;
-                      // Without early exits, so that the loops vectorise.
-                      bool ok = true;
-                      for (size_t c = r.begin(); c < r.end(); ++c) {
-                        ok &= grid.types[c] == type;
-                        ok &= uint64_t(grid.offsets[c + 1]) == (c + 1) * corners;
-                      }
+                      // Without early exits, and or-ing unsigned differences where a bool's &= or a 64-bit
+                      // == would not vectorise.
+                      unsigned mismatch = 0;
+                      for (size_t c = r.begin(); c < r.end(); ++c)
+                        mismatch |= unsigned(grid.types[c] != type);
+                      uint64_t offsetDifference = 0, end = (r.begin() + 1) * corners;
+                      for (size_t c = r.begin(); c < r.end(); ++c, end += corners)
+                        offsetDifference |= uint64_t(grid.offsets[c + 1]) ^ end;
                       for (size_t i = r.begin() * corners; i < r.end() * corners; ++i)
-                        ok &= grid.connectivity[i] < pointCount;
-                      if (!ok)
+                        mismatch |= unsigned(grid.connectivity[i] >= points);
+                      if (mismatch != 0 || offsetDifference != 0)
                         backToBack.store(false, std::memory_order_relaxed);
                     });
   return backToBack ? slotOf(kind.type) : -1;
