@@ -39,7 +39,8 @@ private:
 };
 
 /// A regular file mapped read-only: its bytes are the page cache's, with no copy and no fresh memory to fault
-/// in. No terminating zero. Throws uvr::Error naming it when it cannot be opened or mapped.
+/// in. No terminating zero. Throws uvr::Error naming it when it cannot be opened or mapped; a file cut short
+/// while mapped raises SIGBUS where its lost bytes are read, as any mapping does.
 class MappedFile {
 public:
   explicit MappedFile(const std::string &path);

@@ -947,8 +947,7 @@ private:
 
   std::string path_;
   MappedFile file_;
-  std::string
-      head_; ///< the XML parsed in place: the whole file, or the part before the appended data closed off
+  std::string head_; ///< the XML that pugixml parses in place: all of it, or the part before appended data
   const char *xmlBase_ = "";
   pugi::xml_document doc_;
   const uint8_t *appended_ = nullptr; ///< first byte after the '_' marker
