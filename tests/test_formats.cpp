@@ -319,6 +319,25 @@ TEST(BuildMesh, HandedOverCellsBuildAsViewedOnes) {
   EXPECT_NE(error.find("cell 10: point index " + std::to_string(grid.points.size()) + " outside"),
             std::string::npos)
       << error;
+
+  // The first bad cell is named, by its first bad index, before a field of the wrong size: as the grouping
+  // of a grid viewed in place says.
+  grid.connectivity[4 * 25 + 1] = int64_t(grid.points.size()) + 3;
+  grid.connectivity[4 * 25 + 2] = int64_t(grid.points.size()) + 5;
+  grid.connectivity[4 * 30] = int64_t(grid.points.size()) + 7;
+  grid.fields[0].values.pop_back();
+  const std::string viewedError = errorOf([&] { buildMesh(UnstructuredGrid(grid), "handed.vtu"); });
+  EXPECT_NE(viewedError.find("cell 10: point index"), std::string::npos) << viewedError;
+  EXPECT_EQ(errorOf([&] { buildHandedOver(grid); }), viewedError);
+  grid.connectivity[41] = 0;
+  const std::string laterError = errorOf([&] { buildMesh(UnstructuredGrid(grid), "handed.vtu"); });
+  EXPECT_NE(laterError.find("cell 25: point index"), std::string::npos) << laterError;
+  EXPECT_EQ(errorOf([&] { buildHandedOver(grid); }), laterError);
+  for (int64_t &id : grid.connectivity)
+    id = std::min<int64_t>(std::max<int64_t>(id, 0), int64_t(grid.points.size()) - 1);
+  const std::string fieldError = errorOf([&] { buildMesh(UnstructuredGrid(grid), "handed.vtu"); });
+  EXPECT_NE(fieldError.find("values for"), std::string::npos) << fieldError;
+  EXPECT_EQ(errorOf([&] { buildHandedOver(grid); }), fieldError);
 }
 
 // uvr writes .umesh with points numbered by first use, and reading keeps such a file's order as it is; any

@@ -381,6 +381,7 @@ TEST_F(MalformedVtk, Truncated) {
   std::string vtu = readBytes(kVariants + "sfepy__appended_raw_zlib_h64.vtu");
   expectError(write("cut.vtu", vtu.substr(0, vtu.size() - 60)), "the file ends");
   expectError(write("cut_head.vtu", vtu.substr(0, 300)), "malformed XML");
+  expectError(write("empty.vtu", ""), "malformed XML: No document element found"); // nothing to map
   std::string binary = readBytes(kVariants + "sfepy__binary_v51.vtk");
   expectError(write("cut_binary.vtk", binary.substr(0, binary.find("POINTS") + 400)), "file ends before");
   std::string ascii = readBytes(kVariants + "uGridEx__ascii_v42.vtk");

@@ -60,7 +60,21 @@ public:
   const T *end() const { return data() + size_; }
   operator std::span<const T>() const { return {data(), size_}; }
 
+  /// This buffer's memory as a Buffer of `size` U, which must fit in it; this one is left empty. For an array
+  /// that is done with: the next one in its place takes no fresh pages, each of which the kernel would zero.
+  template <typename U> Buffer<U> reuseAs(size_t size) && {
+    static_assert(alignof(U) <= alignof(std::max_align_t)); // what malloc and allocateArray give
+    if (size > size_ * sizeof(T) / sizeof(U))
+      throw std::bad_alloc();
+    size_ = 0;
+    return Buffer<U>(reinterpret_cast<U *>(data_.release()), size);
+  }
+
 private:
+  template <typename> friend class Buffer;
+
+  Buffer(T *data, size_t size) : data_(data), size_(size) {}
+
   struct Free {
     void operator()(T *p) const { std::free(p); }
   };

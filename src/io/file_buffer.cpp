@@ -8,6 +8,7 @@
 #include <cerrno>
 #include <cstring>
 #include <fcntl.h>
+#include <sys/mman.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -40,6 +41,23 @@ void InputFile::read(uint64_t offset, void *dst, uint64_t n) const {
                       std::string(got < 0 ? std::strerror(errno) : "file shrank while reading"));
     done += uint64_t(got);
   }
+}
+
+MappedFile::MappedFile(const std::string &path) {
+  const InputFile input(path);
+  if (input.size() == 0)
+    return; // mmap refuses an empty range
+  // Populated up front: one call maps every page instead of a fault for each run of them.
+  void *p = ::mmap(nullptr, input.size(), PROT_READ, MAP_PRIVATE | MAP_POPULATE, input.fd_, 0);
+  if (p == MAP_FAILED)
+    throw Error(path, "", std::string("cannot read file: ") + std::strerror(errno));
+  data_ = static_cast<const uint8_t *>(p);
+  size_ = input.size();
+}
+
+MappedFile::~MappedFile() {
+  if (data_)
+    ::munmap(const_cast<uint8_t *>(data_), size_);
 }
 
 FileBuffer readFile(const std::string &path) {

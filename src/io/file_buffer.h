@@ -1,5 +1,5 @@
-// Reading files: whole at once (what the text readers parse), or at given offsets straight into place (what
-// the binary readers do, to copy each byte once).
+// Reading files: whole at once (what the text readers parse), at given offsets straight into place (what
+// the binary readers do, to copy each byte once), or mapped in place (for a reader that only reads them).
 #pragma once
 
 #include "core/buffer.h"
@@ -31,8 +31,28 @@ public:
   void read(uint64_t offset, void *dst, uint64_t n) const;
 
 private:
+  friend class MappedFile;
+
   std::string path_;
   int fd_ = -1;
+  uint64_t size_ = 0;
+};
+
+/// A regular file mapped read-only: its bytes are the page cache's, with no copy and no fresh memory to fault
+/// in. No terminating zero. Throws uvr::Error naming it when it cannot be opened or mapped; a file cut short
+/// while mapped raises SIGBUS where its lost bytes are read, as any mapping does.
+class MappedFile {
+public:
+  explicit MappedFile(const std::string &path);
+  ~MappedFile();
+  MappedFile(const MappedFile &) = delete;
+  MappedFile &operator=(const MappedFile &) = delete;
+
+  const uint8_t *data() const { return data_; }
+  uint64_t size() const { return size_; }
+
+private:
+  const uint8_t *data_ = nullptr;
   uint64_t size_ = 0;
 };
 

@@ -152,11 +152,14 @@ template <typename Dst> struct CastTo {
 /// again in half the memory. An index outside [0, pointCount), as VTK's 64-bit value, becomes kOutside.
 struct NarrowPointIndex {
   static constexpr uint32_t kOutside = UINT32_MAX;
-  uint64_t pointCount;
+  uint32_t pointCount;
 
+  /// By the index's 32-bit halves (a negative one's high half is not 0) and selects without branches: the
+  /// loop over 64-bit indices then vectorises, where SSE2 has no 64-bit compare.
   template <typename Value> uint32_t operator()(Value value) const {
-    const auto index = static_cast<int64_t>(value);
-    return index >= 0 && uint64_t(index) < pointCount ? uint32_t(index) : kOutside;
+    const auto index = uint64_t(static_cast<int64_t>(value));
+    const auto low = uint32_t(index), high = uint32_t(index >> 32);
+    return (high | uint32_t(low >= pointCount)) == 0 ? low : kOutside;
   }
 };
 
@@ -185,10 +188,11 @@ template <typename Dst, typename To>
 void convert(ScalarType type, bool swap, const uint8_t *src, uint64_t count, Dst *dst, const To &to) {
   visitType(type, [&](auto zero) {
     using Src = decltype(zero);
+    const To local = to; // whose members no write to dst can change: the loop need not load them again
     for (uint64_t i = 0; i < count; ++i) {
       Src value;
       std::memcpy(&value, src + i * sizeof(Src), sizeof(Src));
-      dst[i] = to(swap ? byteSwapped(value) : value);
+      dst[i] = local(swap ? byteSwapped(value) : value);
     }
   });
 }
@@ -390,7 +394,7 @@ struct VtuGrid {
 
 class VtuReader {
 public:
-  explicit VtuReader(const std::string &path) : path_(path), file_(readFile(path)) {}
+  explicit VtuReader(const std::string &path) : path_(path), file_(path) {}
 
   VtuGrid read() {
     parseXml();
@@ -423,7 +427,7 @@ private:
     fail(byte, "DataArray '" + array.name + "': " + what);
   }
 
-  const char *fileChars() const { return reinterpret_cast<const char *>(file_.data.data()); }
+  const char *fileChars() const { return reinterpret_cast<const char *>(file_.data()); }
 
   uint64_t position(pugi::xml_node node) const {
     return uint64_t(std::max<ptrdiff_t>(node.offset_debug(), 0));
@@ -431,13 +435,14 @@ private:
   uint64_t position(const char *xmlText) const { return uint64_t(xmlText - xmlBase_); }
 
   void parseXml() {
-    std::string_view all(fileChars(), file_.size);
+    std::string_view all(fileChars(), file_.size());
     constexpr unsigned options = pugi::parse_default & ~pugi::parse_eol; // keeps text where it is in the file
     size_t tag = all.find("<AppendedData");
     pugi::xml_parse_result result;
     if (tag == std::string_view::npos) {
-      xmlBase_ = fileChars();
-      result = doc_.load_buffer_inplace(file_.data.data(), file_.size, options, pugi::encoding_utf8);
+      head_ = std::string(all); // pugixml writes into the text it parses, and the mapping is read-only
+      xmlBase_ = head_.data();
+      result = doc_.load_buffer_inplace(head_.data(), head_.size(), options, pugi::encoding_utf8);
     } else {
       size_t tagEnd = all.find('>', tag);
       if (tagEnd == std::string_view::npos)
@@ -447,7 +452,7 @@ private:
         ++marker;
       if (marker == all.size() || all[marker] != '_')
         fail(marker, "expected '_' at the start of the appended data");
-      appended_ = file_.data.data() + marker + 1;
+      appended_ = file_.data() + marker + 1;
       head_ = std::string(all.substr(0, tagEnd + 1)) + "</AppendedData></VTKFile>";
       xmlBase_ = head_.data();
       result = doc_.load_buffer_inplace(head_.data(), head_.size(), options, pugi::encoding_utf8);
@@ -542,7 +547,7 @@ private:
       begin = reinterpret_cast<const uint8_t *>(array.text.data());
       end = begin + array.text.size();
     } else {
-      end = file_.data.data() + file_.size;
+      end = file_.data() + file_.size();
       if (array.offset > uint64_t(end - appended_))
         fail(array, array.position,
              "offset " + std::to_string(array.offset) + " is past the end of the file");
@@ -550,7 +555,7 @@ private:
       base64 = appendedBase64_;
     }
     const uint8_t *fileStart =
-        array.format == Format::Binary ? reinterpret_cast<const uint8_t *>(xmlBase_) : file_.data.data();
+        array.format == Format::Binary ? reinterpret_cast<const uint8_t *>(xmlBase_) : file_.data();
     ByteStream stream(begin, end, base64);
     const std::string endsFirst =
         array.format == Format::Binary ? " but its text ends first" : " but the file ends first";
@@ -762,11 +767,12 @@ private:
     LeastIndex firstBad(count);
     forEachRun(array, payload, sizeOf(array.type), [&](const uint8_t *bytes, uint64_t first, uint64_t n) {
       convert(array.type, swap_, bytes, n, out + first, to);
+      // Whether any value is bad, without an early exit, so that the loop vectorises; which one, only then.
+      unsigned anyBad = 0; // not a bool, whose |= does not vectorise
       for (uint64_t i = first; i < first + n; ++i)
-        if (bad(out[i])) {
-          firstBad.note(i);
-          break;
-        }
+        anyBad |= unsigned(bad(out[i]));
+      if (anyBad)
+        firstBad.note(uint64_t(std::find_if(out + first, out + first + n, bad) - out));
     });
     return firstBad.least();
   }
@@ -839,7 +845,7 @@ private:
       Payload indices = prepare(connectivity, connectivityCount);
       grid.connectivity = Buffer<uint32_t>(connectivityCount);
       bad = fill(connectivity, indices, connectivityCount, grid.connectivity.data(),
-                 NarrowPointIndex{pointCount},
+                 NarrowPointIndex{uint32_t(pointCount)},
                  [](uint32_t index) { return index == NarrowPointIndex::kOutside; });
       if (bad < connectivityCount) // named by its value in the file, read again
         fail(connectivity, connectivity.position,
@@ -940,8 +946,8 @@ private:
   }
 
   std::string path_;
-  FileBuffer file_;
-  std::string head_; ///< the XML before the appended data, closed off
+  MappedFile file_;
+  std::string head_; ///< the XML that pugixml parses in place: all of it, or the part before appended data
   const char *xmlBase_ = "";
   pugi::xml_document doc_;
   const uint8_t *appended_ = nullptr; ///< first byte after the '_' marker

@@ -6,7 +6,6 @@
 
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
-#include <tbb/task_group.h>
 
 #include <algorithm>
 #include <array>
@@ -171,6 +170,15 @@ template <typename Index> bool outside(Index id, uint64_t pointCount) {
   return uint64_t(int64_t(id)) >= pointCount;
 }
 
+/// orientCell for a type known at compile time: inlined into the loops over millions of cells, with the
+/// type's own arithmetic alone.
+template <CellType Type> bool orient(uint32_t *v, std::span<const Vec3f> points) {
+  if (windingSign(Type, v, points) >= 0.f)
+    return false;
+  reverseWinding(Type, v);
+  return true;
+}
+
 constexpr CellKind kSlotKinds[4] = {
     {CellType::Tetra, 4}, {CellType::Pyramid, 5}, {CellType::Wedge, 6}, {CellType::Hexahedron, 8}};
 
@@ -206,6 +214,7 @@ namespace {
 struct TypeArrays {
   std::array<Buffer<uint32_t>, 4> cells;
   std::array<uint64_t, 4> counts{};
+  std::array<Buffer<uint64_t>, 4> keys; ///< room for each type's sort keys, where it is already at hand
 };
 
 template <typename Index> void checkSpan(const CellArrays<Index> &grid, const std::string &source) {
@@ -216,15 +225,22 @@ template <typename Index> void checkSpan(const CellArrays<Index> &grid, const st
     throw Error(source, "", "cell offsets do not span the connectivity array");
 }
 
+/// Says that point index `bad` of cell c lies outside the points.
+template <typename Index>
+[[noreturn]] void throwOutside(size_t c, Index bad, uint64_t pointCount, const std::string &source) {
+  throw Error(source, "cell " + std::to_string(c),
+              "point index " + std::to_string(bad) + " outside [0, " + std::to_string(pointCount) + ")");
+}
+
 /// Says which point index of cell c lies outside the points.
 template <typename Index>
 [[noreturn]] void throwOutside(const CellArrays<Index> &grid, size_t c, uint64_t pointCount,
                                const std::string &source) {
   const Index *ids = &grid.connectivity[size_t(grid.offsets[c])];
-  const Index bad =
-      *std::find_if(ids, ids + vertexCount(grid.types[c]), [&](Index id) { return outside(id, pointCount); });
-  throw Error(source, "cell " + std::to_string(c),
-              "point index " + std::to_string(bad) + " outside [0, " + std::to_string(pointCount) + ")");
+  throwOutside(
+      c,
+      *std::find_if(ids, ids + vertexCount(grid.types[c]), [&](Index id) { return outside(id, pointCount); }),
+      pointCount, source);
 }
 
 void checkPointCount(size_t pointCount, const std::string &source) {
@@ -248,9 +264,11 @@ void checkFieldSizes(const std::vector<ScalarField> &fields, size_t cellCount, s
 }
 
 /// The mesh from its points, its cells grouped by type and its fields with cell values in type order: the
-/// cells wound, each type's ordered along the Morton curve, the points numbered by first use.
+/// cells wound, each type's ordered along the Morton curve, the points numbered by first use. Checks the
+/// cells' point indices and then the fields' sizes, as groupAndBuild does, in that order; a cell is named by
+/// its index in its type array, which for cells of one type back to back is the file's.
 Mesh windAndOrder(UninitVector<Vec3f> &&points, TypeArrays &&types, std::vector<ScalarField> &&fields,
-                  uint64_t skippedCells) {
+                  uint64_t skippedCells, const std::string &source) {
   Mesh mesh;
   mesh.skippedCells = skippedCells;
   mesh.points = std::move(points);
@@ -261,47 +279,75 @@ Mesh windAndOrder(UninitVector<Vec3f> &&points, TypeArrays &&types, std::vector<
   const uint64_t keptCells = firstCell[3] + perType[3];
 
   // Winding and keys in a pass over each type array. Files seldom list cells in spatial order, so the
-  // corners' points are loaded from all over memory: the loop asks for those of a later cell early.
-  std::array<Buffer<uint64_t>, 4> typeKeys;
+  // corners' points are loaded from all over memory: the loop asks for those of a later cell early (by an
+  // address computed as an integer: the index is checked only when its cell comes). The point indices are
+  // checked here, in the pass that loads the corners anyway, not in one of their own.
+  std::array<Buffer<uint64_t>, 4> &typeKeys = types.keys;
+  const auto pointCount = uint32_t(mesh.points.size());
+  const auto pointsAddress = reinterpret_cast<uintptr_t>(mesh.points.data());
+  struct Wound {
+    uint64_t inverted = 0;
+    size_t firstOutside = SIZE_MAX; ///< the first cell with a point index outside the points
+  };
+  std::array<Wound, 4> wound;
   auto windAndKey = [&]<CellType Type, int Corners>(size_t s) {
     constexpr size_t kPrefetchCells = 16;
-    typeKeys[s] = Buffer<uint64_t>(perType[s]);
-    return tbb::parallel_reduce(
-        tbb::blocked_range<size_t>(0, perType[s], 1 << 12), uint64_t(0),
-        [&](const tbb::blocked_range<size_t> &r, uint64_t inverted) {
+    if (typeKeys[s].size() != perType[s])
+      typeKeys[s] = Buffer<uint64_t>(perType[s]);
+    wound[s] = tbb::parallel_reduce(
+        tbb::blocked_range<size_t>(0, perType[s], 1 << 12), Wound{},
+        [&](const tbb::blocked_range<size_t> &r, Wound w) {
           for (size_t c = r.begin(); c < r.end(); ++c) {
             uint32_t *v = types.cells[s].data() + c * Corners;
             if (c + kPrefetchCells < r.end())
               for (int i = 0; i < Corners; ++i)
-                __builtin_prefetch(&mesh.points[v[kPrefetchCells * Corners + i]]);
-            inverted += orientCell(Type, v, mesh.points);
+                __builtin_prefetch(reinterpret_cast<const void *>(
+                    pointsAddress + v[kPrefetchCells * Corners + i] * sizeof(Vec3f)));
+            unsigned outside = 0;
+            for (int i = 0; i < Corners; ++i)
+              outside |= unsigned(v[i] >= pointCount);
+            if (outside != 0) {
+              w.firstOutside = std::min(w.firstOutside, c);
+              continue;
+            }
+            w.inverted += orient<Type>(v, mesh.points);
             typeKeys[s][c] = cellKeys.key(v, Corners, mesh.points, c);
           }
-          return inverted;
+          return w;
         },
-        std::plus<>());
+        [](Wound a, Wound b) {
+          return Wound{a.inverted + b.inverted, std::min(a.firstOutside, b.firstOutside)};
+        });
   };
-  mesh.invertedCells = windAndKey.template operator()<CellType::Tetra, 4>(0) +
-                       windAndKey.template operator()<CellType::Pyramid, 5>(1) +
-                       windAndKey.template operator()<CellType::Wedge, 6>(2) +
-                       windAndKey.template operator()<CellType::Hexahedron, 8>(3);
+  windAndKey.template operator()<CellType::Tetra, 4>(0);
+  windAndKey.template operator()<CellType::Pyramid, 5>(1);
+  windAndKey.template operator()<CellType::Wedge, 6>(2);
+  windAndKey.template operator()<CellType::Hexahedron, 8>(3);
+  for (size_t s = 0; s < 4; ++s) {
+    if (wound[s].firstOutside != SIZE_MAX) {
+      const size_t c = wound[s].firstOutside;
+      const auto corners = size_t(kSlotKinds[s].corners);
+      const uint32_t *v = types.cells[s].data() + c * corners;
+      throwOutside(c, *std::find_if(v, v + corners, [&](uint32_t id) { return id >= pointCount; }),
+                   pointCount, source);
+    }
+    mesh.invertedCells += wound[s].inverted;
+  }
+  checkFieldSizes(fields, keptCells, mesh.points.size(), source);
 
   std::array<Buffer<uint32_t>, 4> orders;
   for (size_t s = 0; s < 4; ++s)
     orders[s] = sortedOrder(typeKeys[s]);
-  // The cells are placed in a serial pass (see FirstUseNumbering), the cell fields meanwhile on the other
-  // threads.
-  tbb::task_group cellFields;
-  cellFields.run([&] {
-    for (ScalarField &field : fields) {
-      if (field.centering == Centering::Cell) {
-        UninitVector<float> sorted(keptCells);
-        for (size_t s = 0; s < 4; ++s)
-          gather<1>(sorted.data() + firstCell[s], field.values.data() + firstCell[s], perType[s], orders[s]);
-        field.values = std::move(sorted);
-      }
+  // The cell fields before the cells: placing the cells takes one thread for each half of them (see
+  // FirstUseNumbering), and a gather beside them would hold up one half while the other thread waits.
+  for (ScalarField &field : fields) {
+    if (field.centering == Centering::Cell) {
+      UninitVector<float> sorted(keptCells);
+      for (size_t s = 0; s < 4; ++s)
+        gather<1>(sorted.data() + firstCell[s], field.values.data() + firstCell[s], perType[s], orders[s]);
+      field.values = std::move(sorted);
     }
-  });
+  }
   FirstUseNumbering numbering(mesh.points.size());
   auto placeCells = [&]<size_t Corners>(size_t s, UninitVector<uint32_t> &cells) {
     cells.resize(perType[s] * Corners);
@@ -311,7 +357,6 @@ Mesh windAndOrder(UninitVector<Vec3f> &&points, TypeArrays &&types, std::vector<
   placeCells.template operator()<5>(1, mesh.pyramids);
   placeCells.template operator()<6>(2, mesh.wedges);
   placeCells.template operator()<8>(3, mesh.hexes);
-  cellFields.wait();
   mesh.fields = std::move(fields);
   numbering.reorderPoints(mesh);
   return mesh;
@@ -409,13 +454,13 @@ Mesh groupAndBuild(UninitVector<Vec3f> &&points, CellArrays<Index> grid, std::ve
   for (size_t f = 0; f < fields.size(); ++f)
     if (fields[f].centering == Centering::Cell)
       fields[f].values = std::move(typeOrderValues[f]);
-  return windAndOrder(std::move(points), std::move(types), std::move(fields), skippedCells);
+  return windAndOrder(std::move(points), std::move(types), std::move(fields), skippedCells, source);
 }
 
 /// The slot of the one linear volume type of all cells, when they lie back to back in the connectivity (cell
-/// c's corners from entry c * corners on) and name points that exist: the connectivity is then that type's
-/// cell array as it is, and the cells are in type order. -1 otherwise.
-int backToBackSlot(const CellArrays<uint32_t> &grid, size_t pointCount) {
+/// c's corners from entry c * corners on): the connectivity is then that type's cell array as it is, and the
+/// cells are in type order (windAndOrder checks their point indices). -1 otherwise.
+int backToBackSlot(const CellArrays<uint32_t> &grid) {
   const size_t cellCount = grid.types.size();
   CellKind kind;
   // The type code must be the kept type's own: voxels' corners are reordered, higher-order cells have more
@@ -431,15 +476,15 @@ int backToBackSlot(const CellArrays<uint32_t> &grid, size_t pointCount) {
                     [&](const tbb::blocked_range<size_t> &r) {
                       if (!backToBack.load(std::memory_order_relaxed))
                         return;
-                      // Without early exits, so that the loops vectorise.
-                      bool ok = true;
-                      for (size_t c = r.begin(); c < r.end(); ++c) {
-                        ok &= grid.types[c] == type;
-                        ok &= uint64_t(grid.offsets[c + 1]) == (c + 1) * corners;
-                      }
-                      for (size_t i = r.begin() * corners; i < r.end() * corners; ++i)
-                        ok &= grid.connectivity[i] < pointCount;
-                      if (!ok)
+                      // Without early exits, and or-ing unsigned differences where a bool's &= or a 64-bit
+                      // == would not vectorise.
+                      unsigned mismatch = 0;
+                      for (size_t c = r.begin(); c < r.end(); ++c)
+                        mismatch |= unsigned(grid.types[c] != type);
+                      uint64_t offsetDifference = 0, end = (r.begin() + 1) * corners;
+                      for (size_t c = r.begin(); c < r.end(); ++c, end += corners)
+                        offsetDifference |= uint64_t(grid.offsets[c + 1]) ^ end;
+                      if (mismatch != 0 || offsetDifference != 0)
                         backToBack.store(false, std::memory_order_relaxed);
                     });
   return backToBack ? slotOf(kind.type) : -1;
@@ -462,14 +507,15 @@ Mesh buildMesh(UninitVector<Vec3f> &&points, CellBuffers &&cells, std::vector<Sc
   const CellArrays<uint32_t> grid = cells.view();
   const size_t cellCount = grid.types.size();
   checkSpan(grid, source);
-  const int slot = points.size() <= UINT32_MAX ? backToBackSlot(grid, points.size()) : -1;
+  const int slot = points.size() <= UINT32_MAX ? backToBackSlot(grid) : -1;
   if (slot < 0)
     return groupAndBuild(std::move(points), grid, std::move(fields), source);
-  checkFieldSizes(fields, cellCount, points.size(), source);
   TypeArrays types;
   types.cells[size_t(slot)] = std::move(cells.connectivity);
   types.counts[size_t(slot)] = cellCount;
-  return windAndOrder(std::move(points), std::move(types), std::move(fields), 0);
+  // The offsets are done with, and one longer than the keys.
+  types.keys[size_t(slot)] = std::move(cells.offsets).reuseAs<uint64_t>(cellCount);
+  return windAndOrder(std::move(points), std::move(types), std::move(fields), 0, source);
 }
 
 } // namespace uvr
