@@ -170,12 +170,12 @@ template <typename Index> bool outside(Index id, uint64_t pointCount) {
   return uint64_t(int64_t(id)) >= pointCount;
 }
 
-/// orientCell for a type known at compile time: inlined into the loops over millions of cells, with the
-/// type's own arithmetic alone.
-template <CellType Type> bool orient(uint32_t *v, std::span<const Vec3f> points) {
-  if (windingSign(Type, v, points) >= 0.f)
+/// orientCell's body, always inlined: a loop over one type's cells, passing that type as a constant, is
+/// compiled for that type's arithmetic alone.
+[[gnu::always_inline]] inline bool orientInline(CellType type, uint32_t *v, std::span<const Vec3f> points) {
+  if (windingSign(type, v, points) >= 0.f)
     return false;
-  reverseWinding(Type, v);
+  reverseWinding(type, v);
   return true;
 }
 
@@ -185,10 +185,7 @@ constexpr CellKind kSlotKinds[4] = {
 } // namespace
 
 bool orientCell(CellType type, uint32_t *v, std::span<const Vec3f> points) {
-  if (windingSign(type, v, points) >= 0.f)
-    return false;
-  reverseWinding(type, v);
-  return true;
+  return orientInline(type, v, points);
 }
 
 int vertexCount(uint8_t vtkType) {
@@ -310,7 +307,7 @@ Mesh windAndOrder(UninitVector<Vec3f> &&points, TypeArrays &&types, std::vector<
               w.firstOutside = std::min(w.firstOutside, c);
               continue;
             }
-            w.inverted += orient<Type>(v, mesh.points);
+            w.inverted += orientInline(Type, v, mesh.points);
             typeKeys[s][c] = cellKeys.key(v, Corners, mesh.points, c);
           }
           return w;
