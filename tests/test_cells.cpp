@@ -44,6 +44,25 @@ TEST(TetWeights, LinearFieldIsExactInside) {
   EXPECT_NEAR(w[0], 1.f, 1e-6f);
 }
 
+// The weights' change along a direction predicts the weights of points further along it.
+TEST(TetWeights, ChangeAlongADirectionIsTheWeightsDifference) {
+  const Vec3f a{0.1f, 0.2f, 0.3f}, b{1.3f, 0.1f, 0.2f}, c{0.4f, 1.2f, 0.1f}, d{0.5f, 0.4f, 1.1f};
+  std::mt19937 random(5);
+  std::uniform_real_distribution<float> u(-1.f, 1.f);
+  for (int i = 0; i < 1000; ++i) {
+    const Vec3f p{u(random), u(random), u(random)}, direction{u(random), u(random), u(random)};
+    const float s = u(random);
+    float w[4], dw[4], ahead[4], plain[4];
+    ASSERT_TRUE(tetBarycentricsAlong(a, b, c, d, p, direction, w, dw));
+    ASSERT_TRUE(tetBarycentrics(a, b, c, d, p + direction * s, ahead));
+    ASSERT_TRUE(tetBarycentrics(a, b, c, d, p, plain));
+    for (int k = 0; k < 4; ++k) {
+      EXPECT_EQ(w[k], plain[k]);
+      EXPECT_NEAR(w[k] + s * dw[k], ahead[k], 1e-5f);
+    }
+  }
+}
+
 TEST_P(EveryCellType, ShapeFunctionsReproduceVertexValues) {
   const Mesh mesh = jitteredMesh(GetParam());
   const MeshView view = makeMeshView(mesh, mesh.findField("f"));

@@ -18,22 +18,33 @@ constexpr uint32_t kNoCell = 0xffffffffu;
 
 UVR_HOST_DEVICE inline float det3(Vec3f a, Vec3f b, Vec3f c) { return dot(a, cross(b, c)); }
 
-/// Barycentric weights of `p` in tetrahedron (a, b, c, d), inside or not; false when the cell is flat.
-UVR_HOST_DEVICE inline bool tetBarycentrics(Vec3f a, Vec3f b, Vec3f c, Vec3f d, Vec3f p, float w[4]) {
-  const Vec3f pa = a - p, pb = b - p, pc = c - p, pd = d - p;
-  // Each weight is the volume of the tet with its vertex replaced by p, over the whole volume.
-  const float w0 = det3(pb, pc, pd);
-  const float w1 = det3(pc, pa, pd);
-  const float w2 = det3(pa, pb, pd);
-  const float volume = det3(b - a, c - a, d - a);
+/// Barycentric weights `w` of `p` in tetrahedron (a, b, c, d), inside or not, and their change `dw` per unit
+/// step along `direction`: the weights of p + s * direction are w + s * dw. False when the cell is flat.
+UVR_HOST_DEVICE inline bool tetBarycentricsAlong(Vec3f a, Vec3f b, Vec3f c, Vec3f d, Vec3f p, Vec3f direction,
+                                                 float w[4], float dw[4]) {
+  const Vec3f e1 = b - a, e2 = c - a, e3 = d - a;
+  // The weights' gradients times the volume: the rows of the inverse of [e1 e2 e3], times its determinant.
+  const Vec3f g1 = cross(e2, e3), g2 = cross(e3, e1), g3 = cross(e1, e2);
+  const float volume = dot(e1, g1);
   if (!(volume != 0.f))
     return false;
   const float inv = 1.f / volume;
-  w[0] = w0 * inv;
-  w[1] = w1 * inv;
-  w[2] = w2 * inv;
-  w[3] = 1.f - w[0] - w[1] - w[2];
+  const Vec3f q = p - a;
+  w[1] = dot(g1, q) * inv;
+  w[2] = dot(g2, q) * inv;
+  w[3] = dot(g3, q) * inv;
+  w[0] = 1.f - w[1] - w[2] - w[3];
+  dw[1] = dot(g1, direction) * inv;
+  dw[2] = dot(g2, direction) * inv;
+  dw[3] = dot(g3, direction) * inv;
+  dw[0] = -dw[1] - dw[2] - dw[3];
   return true;
+}
+
+/// Barycentric weights of `p` in tetrahedron (a, b, c, d), inside or not; false when the cell is flat.
+UVR_HOST_DEVICE inline bool tetBarycentrics(Vec3f a, Vec3f b, Vec3f c, Vec3f d, Vec3f p, float w[4]) {
+  float unused[4]; // computed, then dropped by the compiler
+  return tetBarycentricsAlong(a, b, c, d, p, Vec3f{}, w, unused);
 }
 
 /// Index of the smallest weight: the face (opposite that vertex) the point lies furthest beyond.
