@@ -152,6 +152,34 @@ TEST_P(Integrator, AdaptiveStepsKeepTheTransmittance) {
     expectExponentialTransmittance(renderer, settingsFor(mode, s1, s2), alphaPerUnit, s2, 1e-4f);
 }
 
+// Adaptive steps are whole numbers of s1. Colour varies only near the centre, so that the other partitions
+// all take s2; two values of s2 that round to the same number of fixed steps then render the same frame with
+// the same samples, about a third of reference's, and one that rounds to two steps takes about half.
+TEST_P(Integrator, AdaptiveStepsAreWholeFixedSteps) {
+  const Mesh mesh = buildMesh(makeBoxGrid(CellType::Tetra, 8, kBox, radial, 0.2f), "box");
+  Renderer renderer(mesh, mesh.findField("f"), 32);
+  ColorMap map = constantMap(0.3f);
+  map.rgbPoints = {0.f, 1.f, 1.f, 1.f, 0.9f, 1.f, 1.f, 1.f, 1.f, 1.f, 0.f, 0.f};
+  renderer.setTransferFunction(TransferFunction(map, 0.f, 1.f));
+  const float s1 = 0.01f;
+  auto render = [&](RenderMode mode, float s2) {
+    return renderer.render(obliqueCamera(), settingsFor(mode, s1, s2));
+  };
+  const Frame reference = render(RenderMode::Reference, s1);
+  const Frame three = render(RenderMode::Adaptive, 2.6f * s1),
+              alsoThree = render(RenderMode::Adaptive, 3.4f * s1),
+              two = render(RenderMode::Adaptive, 2.4f * s1);
+  EXPECT_EQ(three.image.rgb, alsoThree.image.rgb);
+  EXPECT_EQ(three.samplesPerPixel, alsoThree.samplesPerPixel);
+  EXPECT_NE(three.image.rgb, two.image.rgb);
+  const double total = double(reference.samplesTotal);
+  // A third and a half, plus a sample where each partition's march begins and the centre's finer steps.
+  EXPECT_GT(double(three.samplesTotal) / total, 1.0 / 3.0);
+  EXPECT_LT(double(three.samplesTotal) / total, 0.42);
+  EXPECT_GT(double(two.samplesTotal) / total, 1.0 / 2.0);
+  EXPECT_LT(double(two.samplesTotal) / total, 0.58);
+}
+
 TEST_P(Integrator, SkippingChangesNoContributingSample) {
   const Mesh mesh = buildMesh(makeBoxGrid(CellType::Tetra, 12, kBox, radial, 0.25f), "box");
   Renderer renderer(mesh, mesh.findField("f"), 32);

@@ -168,8 +168,9 @@ struct RayResult {
 };
 
 /// Integrates one ray front to back. Samples lie on the grid t = tEnter + k * s1 fixed along the ray (tEnter:
-/// where it enters the mesh bounds); a partition marched with step s starts at its first grid point, so
-/// skipping alone changes no sample that contributes, and s = s1 reproduces the fixed-step samples exactly.
+/// where it enters the mesh bounds); a partition's adaptive step is rounded to a whole number of s1 and its
+/// march starts at its first grid point, so every sample is one that `reference` takes: skipping alone changes
+/// no sample that contributes, and a step of s1 reproduces the fixed-step samples exactly.
 /// `hint` is a cell near the ray's first sample (the neighbouring pixel's: rays are coherent), or kNoCell; it
 /// is updated to this ray's first cell.
 UVR_HOST_DEVICE inline RayResult integrateRay(const SceneView &scene, const IntegratorSettings &settings,
@@ -201,9 +202,12 @@ UVR_HOST_DEVICE inline RayResult integrateRay(const SceneView &scene, const Inte
     // point where the next interval's samples begin, so that intervals marched with longer steps neither
     // overlap nor leave gaps at partition boundaries (with step s1 nothing changes).
     const float kEnd = gridIndex(tb);
-    const float stride = step / s1;
-    const int walkSteps = 8 * int(ceilf(stride));         // a longer step crosses proportionally more tets
-    const bool far = step > scene.seeds.grid.voxelEdge(); // the seed lies nearer than the previous sample
+    // Whole fixed steps: every sample is one of reference's, and at the default unit the opacity needs no
+    // correction for most of them.
+    const float stride = maxf(1.f, rintf(step / s1));
+    const int walkSteps = 8 * int(stride); // a longer step crosses proportionally more tets
+    const bool far =
+        stride * s1 > scene.seeds.grid.voxelEdge(); // the seed lies nearer than the previous sample
     for (float t = tEnter + k * s1; t < tb; k += stride, t = tEnter + k * s1) {
       ++result.samples;
       float value;
