@@ -48,12 +48,11 @@ UVR_HOST_DEVICE inline bool tetBarycentrics(Vec3f a, Vec3f b, Vec3f c, Vec3f d, 
 }
 
 /// Index of the smallest weight: the face (opposite that vertex) the point lies furthest beyond.
+/// Ties go to the lower index. Selects, not branches: which face a walk leaves by is unpredictable.
 UVR_HOST_DEVICE inline int smallestWeight(const float w[4]) {
-  int i = 0;
-  for (int k = 1; k < 4; ++k)
-    if (w[k] < w[i])
-      i = k;
-  return i;
+  const bool low1 = w[1] < w[0], low3 = w[3] < w[2];
+  const float lowest01 = low1 ? w[1] : w[0], lowest23 = low3 ? w[3] : w[2];
+  return lowest23 < lowest01 ? 2 + int(low3) : int(low1);
 }
 
 /// Barycentric weights of `p` in tetrahedron (a, b, c, d); false when `p` is outside or the cell is flat.
