@@ -41,15 +41,6 @@ struct SceneView {
   TransferFunctionView tf;
 };
 
-/// Whether rays carry their tet's weights along them (RayCell). On a CPU that saves a tet's loads and
-/// determinants on most samples, 10-20 % of a frame; on a GPU the state's registers spill and cost more
-/// (the render kernel's spill stores grew from 268 to 672 bytes, frames 1-5 % slower).
-#ifdef __CUDA_ARCH__
-constexpr bool kTetsAlongRay = false;
-#else
-constexpr bool kTetsAlongRay = true;
-#endif
-
 /// The cell a ray's last sample lies in. For a tet, also the sample's barycentric weights and field with
 /// their change per unit t along the ray: the next sample, a step on, is tested against the tet with a few
 /// multiply-adds and no loads, and where it lies beyond, its weights name the face to walk across.
@@ -70,7 +61,7 @@ UVR_HOST_DEVICE inline bool walkTets(const SceneView &scene, const Ray &ray, flo
   uint32_t current = start;
   int step = 0;
   float w[4];
-  if (kTetsAlongRay && at.affine && at.cell == start) {
+  if (at.affine && at.cell == start) {
     const float s = t - at.t;
     for (int i = 0; i < 4; ++i)
       w[i] = at.w[i] + s * at.dw[i];
@@ -101,16 +92,14 @@ UVR_HOST_DEVICE inline bool walkTets(const SceneView &scene, const Ray &ray, flo
         slope = dw[0] * v0 + dw[1] * v1 + dw[2] * v2 + dw[3] * v3;
       }
       at.cell = current;
-      at.affine = kTetsAlongRay;
-      if (kTetsAlongRay) {
-        at.t = t;
-        for (int i = 0; i < 4; ++i) {
-          at.w[i] = w[i];
-          at.dw[i] = dw[i];
-        }
-        at.value = value;
-        at.dvalue = slope;
+      at.affine = true;
+      at.t = t;
+      for (int i = 0; i < 4; ++i) {
+        at.w[i] = w[i];
+        at.dw[i] = dw[i];
       }
+      at.value = value;
+      at.dvalue = slope;
       return true;
     }
     current = scene.tetNeighbors[4 * uint64_t(current) + uint64_t(exit)];
@@ -169,10 +158,10 @@ struct RayResult {
 
 /// Integrates one ray front to back. Samples lie on the grid t = tEnter + k * s1 fixed along the ray (tEnter:
 /// where it enters the mesh bounds); a partition's adaptive step is rounded to a whole number of s1 and its
-/// march starts at its first grid point, so every sample is one that `reference` takes: skipping alone changes
-/// no sample that contributes, and a step of s1 reproduces the fixed-step samples exactly.
-/// `hint` is a cell near the ray's first sample (the neighbouring pixel's: rays are coherent), or kNoCell; it
-/// is updated to this ray's first cell.
+/// march starts at its first grid point, so every sample is one that `reference` takes: skipping alone
+/// changes no sample that contributes, and a step of s1 reproduces the fixed-step samples exactly. `hint` is
+/// a cell near the ray's first sample (the neighbouring pixel's: rays are coherent), or kNoCell; it is
+/// updated to this ray's first cell.
 UVR_HOST_DEVICE inline RayResult integrateRay(const SceneView &scene, const IntegratorSettings &settings,
                                               const Ray &ray, uint32_t &hint) {
   RayResult result;

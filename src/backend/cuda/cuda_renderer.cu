@@ -40,18 +40,26 @@ void throwOutOfMemory(size_t bytes) {
 
 namespace {
 
-// 128 pixels per block. Asking for 5 resident blocks per SM caps the kernel at 96 registers (156 unbounded):
-// on an H200, reference frames 12-18 % faster, full frames 0-9 %, for a few spills to L1.
+// 128 pixels per block.
 constexpr unsigned kRenderBlockThreads = 128;
+
+bool skipping(RenderMode mode) { return mode == RenderMode::Skip || mode == RenderMode::Full; }
 
 /// The block's shape for `mode`. Marching every ray, warps of 16x2 pixels are fastest; skipping, warps of
 /// 32x1 (on an H200, side by side: `full` 2-13 % faster, `reference` 3-13 % slower with 32x1).
 dim3 renderBlock(RenderMode mode) {
-  const bool skipping = mode == RenderMode::Skip || mode == RenderMode::Full;
-  return skipping ? dim3(32, kRenderBlockThreads / 32) : dim3(16, kRenderBlockThreads / 16);
+  return skipping(mode) ? dim3(32, kRenderBlockThreads / 32) : dim3(16, kRenderBlockThreads / 16);
 }
 
-__global__ void __launch_bounds__(kRenderBlockThreads, 5)
+/// Resident blocks per SM asked of the compiler, which caps registers: 5 blocks, 96 registers (156
+/// unbounded), suit the marching modes (on an H200 `reference` 12-18 % faster than unbounded, for a few
+/// spills to L1); 4 blocks, 128 registers, the skipping ones, whose rays carry their tet (RayCell) without
+/// spilling
+/// (`full` 857k translucent 2.34-2.37 against 2.47-2.49 ms at 96; `reference` 3-4 % slower at 128).
+constexpr int kMarchingBlocksPerSm = 5, kSkippingBlocksPerSm = 4;
+
+template <int BlocksPerSm>
+__global__ void __launch_bounds__(kRenderBlockThreads, BlocksPerSm)
     renderKernel(SceneView scene, IntegratorSettings settings, CameraView camera, PixelTarget target,
                  int height, SampleTotals *samples) {
   const int x = int(blockIdx.x * blockDim.x + threadIdx.x);
@@ -324,7 +332,12 @@ double CudaRenderer::render(const CameraView &camera, const IntegratorSettings &
   const dim3 grid((unsigned(target.width) + block.x - 1) / block.x,
                   (unsigned(height) + block.y - 1) / block.y);
   UVR_CUDA_CHECK(cudaEventRecord(d.kernelStart));
-  renderKernel<<<grid, block>>>(d.scene, settings, camera, device, height, d.sampleTotals.data());
+  if (skipping(settings.mode))
+    renderKernel<kSkippingBlocksPerSm>
+        <<<grid, block>>>(d.scene, settings, camera, device, height, d.sampleTotals.data());
+  else
+    renderKernel<kMarchingBlocksPerSm>
+        <<<grid, block>>>(d.scene, settings, camera, device, height, d.sampleTotals.data());
   UVR_CUDA_CHECK(cudaGetLastError());
   UVR_CUDA_CHECK(cudaEventRecord(d.kernelEnd));
   UVR_CUDA_CHECK(cudaDeviceSynchronize()); // a kernel fault surfaces here
