@@ -194,9 +194,10 @@ UVR_HOST_DEVICE inline RayResult integrateRay(const SceneView &scene, const Inte
     // Whole fixed steps: every sample is one of reference's, and at the default unit the opacity needs no
     // correction for most of them.
     const float stride = maxf(1.f, rintf(step / s1));
-    const int walkSteps = 8 * int(stride); // a longer step crosses proportionally more tets
-    const bool far =
-        stride * s1 > scene.seeds.grid.voxelEdge(); // the seed lies nearer than the previous sample
+    // A longer step crosses proportionally more tets; past a seed voxel, the seed lies nearer than the
+    // previous sample.
+    const int walkSteps = 8 * int(stride);
+    const bool far = stride * s1 > scene.seeds.grid.voxelEdge();
     for (float t = tEnter + k * s1; t < tb; k += stride, t = tEnter + k * s1) {
       ++result.samples;
       float value;

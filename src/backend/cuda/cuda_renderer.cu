@@ -51,11 +51,11 @@ dim3 renderBlock(RenderMode mode) {
   return skipping(mode) ? dim3(32, kRenderBlockThreads / 32) : dim3(16, kRenderBlockThreads / 16);
 }
 
-/// Resident blocks per SM asked of the compiler, which caps registers: 5 blocks, 96 registers (156
-/// unbounded), suit the marching modes (on an H200 `reference` 12-18 % faster than unbounded, for a few
-/// spills to L1); 4 blocks, 128 registers, the skipping ones, whose rays carry their tet (RayCell) without
-/// spilling
-/// (`full` 857k translucent 2.34-2.37 against 2.47-2.49 ms at 96; `reference` 3-4 % slower at 128).
+/// Resident blocks per SM asked of the compiler, which caps registers. 5 blocks, 96 registers (156
+/// unbounded), suit the marching modes: on an H200 `reference` 12-18 % faster than unbounded, for a few
+/// spills to L1. 4 blocks, 128 registers, suit the skipping ones, whose rays carry their tet (RayCell)
+/// without spilling: `full` 857k translucent 2.34-2.37 against 2.47-2.49 ms at 96; `reference` 3-4 % slower
+/// at 128.
 constexpr int kMarchingBlocksPerSm = 5, kSkippingBlocksPerSm = 4;
 
 template <int BlocksPerSm>
