@@ -127,33 +127,8 @@ UVR_HOST_DEVICE inline bool insideReference(Vec3f r, int n) {
   return n == 6 ? inCube && r.x + r.y <= hi : inCube;
 }
 
-/// Whether `p` lies outside one of the three slabs, each between two planes normal to a pair of the columns
-/// `dr`, `ds`, `dt` of a Jacobian of the cell, that hold the cell's corners. The shape functions are
-/// non-negative and sum to one inside the reference cell, so the cell lies within its corners' convex hull,
-/// and such a point lies outside it whatever the cell's shape; for cells near a parallelepiped the slabs are
-/// tight, and they say so at once, where Newton's iteration takes several steps to leave the reference cell.
-template <int N>
-UVR_HOST_DEVICE inline bool outsideCornerSlabs(const Vec3f (&corner)[N], Vec3f p, Vec3f dr, Vec3f ds,
-                                               Vec3f dt) {
-  const Vec3f normals[3] = {cross(ds, dt), cross(dt, dr), cross(dr, ds)};
-  for (const Vec3f &n : normals) {
-    float lowest = dot(n, corner[0]), highest = lowest;
-    for (int i = 1; i < N; ++i) {
-      const float d = dot(n, corner[i]);
-      lowest = minf(lowest, d);
-      highest = maxf(highest, d);
-    }
-    // Ten times the parametric tolerance: a point insideReference accepts is never cut off.
-    const float x = dot(n, p), slack = (highest - lowest) * (10.f * kInsideTolerance);
-    if (x < lowest - slack || x > highest + slack)
-      return true;
-  }
-  return false;
-}
-
 /// Inverts x(r) = sum_i N_i(r) p_i by Newton's method: the parametric coordinates `r` of `p`; false where `p`
-/// lies outside the cell's box or its corners' slabs, the iteration runs far outside the reference cell, or
-/// the cell is degenerate.
+/// lies outside the cell's box, the iteration runs far outside the reference cell, or the cell is degenerate.
 /// The caller tells inside from outside (insideReference).
 template <int N>
 UVR_HOST_DEVICE inline bool parametricCoordinates(const Vec3f *points, const uint32_t *v, Vec3f p, Vec3f &r) {
@@ -185,8 +160,6 @@ UVR_HOST_DEVICE inline bool parametricCoordinates(const Vec3f *points, const uin
       ds = ds + corner[i] * s.derivative[i].y;
       dt = dt + corner[i] * s.derivative[i].z;
     }
-    if (iteration == 0 && outsideCornerSlabs<N>(corner, p, dr, ds, dt))
-      return false;
     // Converged; also the way out at a pyramid's apex, where the Jacobian is singular.
     if (fabsf(residual.x) + fabsf(residual.y) + fabsf(residual.z) <= 1e-6f * scale)
       break;
