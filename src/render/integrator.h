@@ -21,6 +21,16 @@ enum class RenderMode : uint8_t {
   Full       ///< both
 };
 
+/// Whether `mode` skips transparent partitions and empty space.
+UVR_HOST_DEVICE constexpr bool skipsSpace(RenderMode mode) {
+  return mode == RenderMode::Skip || mode == RenderMode::Full;
+}
+
+/// Whether `mode` steps through each partition by its colour variance.
+UVR_HOST_DEVICE constexpr bool samplesAdaptively(RenderMode mode) {
+  return mode == RenderMode::Adaptive || mode == RenderMode::Full;
+}
+
 struct IntegratorSettings {
   RenderMode mode = RenderMode::Full;
   float s1 = 1.f, s2 = 1.f, p = 2.f;
@@ -169,8 +179,7 @@ UVR_HOST_DEVICE inline RayResult integrateRay(const SceneView &scene, const Inte
   if (!intersectBox(ray, scene.partitions.rootBounds, 0.f, INFINITY, tEnter, tExit))
     return result;
 
-  const bool skip = settings.mode == RenderMode::Skip || settings.mode == RenderMode::Full;
-  const bool adaptive = settings.mode == RenderMode::Adaptive || settings.mode == RenderMode::Full;
+  const bool skip = skipsSpace(settings.mode), adaptive = samplesAdaptively(settings.mode);
   // Rejecting samples in empty space is part of space skipping: the modes without it locate every sample the
   // plain way, as the paper's reference ray marcher does.
   RayCell at;

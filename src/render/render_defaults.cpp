@@ -56,14 +56,13 @@ nlohmann::json frameStats(const Mesh &mesh, const Renderer &renderer, const Rend
                           const Frame &frame, double renderMs, int fieldIndex) {
   const IntegratorSettings &is = settings.integrator;
   const double pixels = double(settings.width) * double(settings.height);
-  const bool skipping = is.mode == RenderMode::Skip || is.mode == RenderMode::Full;
   nlohmann::json stats = {
       {"mode", modeName(is.mode)},
       {"width", settings.width},
       {"height", settings.height},
       {"cells", mesh.cellCount()},
       {"partitions", renderer.partitionCount(settings.backend)},
-      {"partitions_skipped", skipping ? renderer.transparentPartitions() : 0},
+      {"partitions_skipped", skipsSpace(is.mode) ? renderer.transparentPartitions() : 0},
       {"samples_total", frame.samplesTotal},
       {"samples_per_pixel_mean", double(frame.samplesTotal) / pixels},
       {"samples_per_pixel_max", frame.samplesMax},

@@ -43,12 +43,10 @@ namespace {
 // 128 pixels per block.
 constexpr unsigned kRenderBlockThreads = 128;
 
-bool skipping(RenderMode mode) { return mode == RenderMode::Skip || mode == RenderMode::Full; }
-
 /// The block's shape for `mode`. Marching every ray, warps of 16x2 pixels are fastest; skipping, warps of
 /// 32x1 (on an H200, side by side: `full` 2-13 % faster, `reference` 3-13 % slower with 32x1).
 dim3 renderBlock(RenderMode mode) {
-  return skipping(mode) ? dim3(32, kRenderBlockThreads / 32) : dim3(16, kRenderBlockThreads / 16);
+  return skipsSpace(mode) ? dim3(32, kRenderBlockThreads / 32) : dim3(16, kRenderBlockThreads / 16);
 }
 
 /// Resident blocks per SM asked of the compiler, which caps registers. 5 blocks, 96 registers (156
@@ -332,7 +330,7 @@ double CudaRenderer::render(const CameraView &camera, const IntegratorSettings &
   const dim3 grid((unsigned(target.width) + block.x - 1) / block.x,
                   (unsigned(height) + block.y - 1) / block.y);
   UVR_CUDA_CHECK(cudaEventRecord(d.kernelStart));
-  if (skipping(settings.mode))
+  if (skipsSpace(settings.mode))
     renderKernel<kSkippingBlocksPerSm>
         <<<grid, block>>>(d.scene, settings, camera, device, height, d.sampleTotals.data());
   else
