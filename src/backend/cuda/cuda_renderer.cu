@@ -330,12 +330,9 @@ double CudaRenderer::render(const CameraView &camera, const IntegratorSettings &
   const dim3 grid((unsigned(target.width) + block.x - 1) / block.x,
                   (unsigned(height) + block.y - 1) / block.y);
   UVR_CUDA_CHECK(cudaEventRecord(d.kernelStart));
-  if (skipsSpace(settings.mode))
-    renderKernel<kSkippingBlocksPerSm>
-        <<<grid, block>>>(d.scene, settings, camera, device, height, d.sampleTotals.data());
-  else
-    renderKernel<kMarchingBlocksPerSm>
-        <<<grid, block>>>(d.scene, settings, camera, device, height, d.sampleTotals.data());
+  const auto kernel =
+      skipsSpace(settings.mode) ? renderKernel<kSkippingBlocksPerSm> : renderKernel<kMarchingBlocksPerSm>;
+  kernel<<<grid, block>>>(d.scene, settings, camera, device, height, d.sampleTotals.data());
   UVR_CUDA_CHECK(cudaGetLastError());
   UVR_CUDA_CHECK(cudaEventRecord(d.kernelEnd));
   UVR_CUDA_CHECK(cudaDeviceSynchronize()); // a kernel fault surfaces here
