@@ -185,7 +185,6 @@ UVR_HOST_DEVICE inline RayResult integrateRay(const SceneView &scene, const Inte
   RayCell at;
   at.cell = hint;
   bool first = true;
-  // Marches [ta, tb) with step `step`; false once the ray is opaque.
   const float s1 = settings.s1;
   // The index of the first grid point at or after t.
   auto gridIndex = [&](float t) {
@@ -194,6 +193,7 @@ UVR_HOST_DEVICE inline RayResult integrateRay(const SceneView &scene, const Inte
       k += 1.f;
     return k;
   };
+  // Marches [ta, tb) with step `step`; false once the ray is opaque.
   auto march = [&](float ta, float tb, float step) {
     float k = gridIndex(ta);
     // A sample stands for the distance to the next one; the last one before tb for the distance to the grid
