@@ -78,6 +78,14 @@ TEST(AccelLayout, TetNeighborsAreTheSmallestOtherTetHoldingEachFace) {
       interior += expected != 0xffffffffu;
     }
   EXPECT_GT(interior, 3 * neighbors.size() / 4);
+  // The boundary faces are the others, listed once each in increasing order.
+  const std::vector<uint32_t> boundary = listBoundaryFaces(neighbors);
+  EXPECT_EQ(boundary.size(), neighbors.size() - interior);
+  for (size_t i = 0; i < boundary.size(); ++i) {
+    ASSERT_EQ(neighbors[boundary[i]], 0xffffffffu) << "face " << boundary[i];
+    if (i > 0)
+      ASSERT_LT(boundary[i - 1], boundary[i]);
+  }
 }
 
 TEST(AccelLayout, BvhIsLaidOutDepthFirstWithEachCellOnce) {

@@ -117,6 +117,9 @@ TEST(BackendsAgree, CudaBuildsTheHostsAccelerationData) {
       };
       EXPECT_EQ(rows(device.seeds), rows(seeds));
       EXPECT_EQ(seeds.boundaryFaces.empty(), type != CellType::Tetra);
+      std::vector<uint32_t> boundary = device.boundaryFaceList; // listed by atomics, in any order
+      std::sort(boundary.begin(), boundary.end());
+      EXPECT_EQ(boundary, type == CellType::Tetra ? listBoundaryFaces(neighbors) : std::vector<uint32_t>{});
       expectValidBvh(view, device.bvh);
     }
   }

@@ -62,4 +62,12 @@ std::vector<uint32_t> buildTetNeighbors(const Mesh &mesh) {
   return neighbors;
 }
 
+std::vector<uint32_t> listBoundaryFaces(const std::vector<uint32_t> &tetNeighbors) {
+  std::vector<uint32_t> faces;
+  for (size_t entry = 0; entry < tetNeighbors.size(); ++entry)
+    if (tetNeighbors[entry] == 0xffffffffu)
+      faces.push_back(uint32_t(entry));
+  return faces;
+}
+
 } // namespace uvr

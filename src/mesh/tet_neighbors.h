@@ -13,6 +13,10 @@ namespace uvr {
 /// boundary: 4 entries per tet, indexed as the cells are.
 std::vector<uint32_t> buildTetNeighbors(const Mesh &mesh);
 
+/// The tet faces with no neighbour (the boundary faces), numbered 4 * tet + i for the face opposite corner
+/// i, in increasing order; `tetNeighbors` as buildTetNeighbors gives them, for fewer than 2^30 tets.
+std::vector<uint32_t> listBoundaryFaces(const std::vector<uint32_t> &tetNeighbors);
+
 UVR_HOST_DEVICE inline bool tetHolds(const uint32_t *tet, uint32_t point) {
   return (tet[0] == point) | (tet[1] == point) | (tet[2] == point) | (tet[3] == point);
 }

@@ -8,6 +8,7 @@
 #include "accel/seed_grid.h"
 #include "core/host_device.h"
 #include "mesh/cell.h"
+#include "render/boundary_crossings.h"
 #include "render/transfer_function.h"
 
 #include <cstdint>
@@ -171,9 +172,11 @@ struct RayResult {
 /// march starts at its first grid point, so every sample is one that `reference` takes: skipping alone
 /// changes no sample that contributes, and a step of s1 reproduces the fixed-step samples exactly. `hint` is
 /// a cell near the ray's first sample (the neighbouring pixel's: rays are coherent), or kNoCell; it is
-/// updated to this ray's first cell.
+/// updated to this ray's first cell. The skipping modes march only between the ray's first and last boundary
+/// crossings, where `crossings` knows them.
 UVR_HOST_DEVICE inline RayResult integrateRay(const SceneView &scene, const IntegratorSettings &settings,
-                                              const Ray &ray, uint32_t &hint) {
+                                              const Ray &ray, uint32_t &hint,
+                                              const BoundaryCrossings &crossings) {
   RayResult result;
   float tEnter, tExit;
   if (!intersectBox(ray, scene.partitions.rootBounds, 0.f, INFINITY, tEnter, tExit))
@@ -185,6 +188,17 @@ UVR_HOST_DEVICE inline RayResult integrateRay(const SceneView &scene, const Inte
   RayCell at;
   at.cell = hint;
   bool first = true;
+  float tStart = tEnter, tStop = tExit;
+  if (skip) {
+    if (crossings.first == INFINITY)
+      return result;
+    // A hundredth of a step of slack: rounding never leaves out a sample that `reference` finds in a cell.
+    const float margin = 0.01f * settings.s1;
+    tStart = maxf(tEnter, crossings.first - margin);
+    tStop = minf(tExit, crossings.last + margin);
+    if (crossings.face != kNoCell)
+      at.cell = crossings.face >> 2;
+  }
   const float s1 = settings.s1;
   // The index of the first grid point at or after t.
   auto gridIndex = [&](float t) {
@@ -241,7 +255,7 @@ UVR_HOST_DEVICE inline RayResult integrateRay(const SceneView &scene, const Inte
   }
   // With skipping, the traversal culls transparent partitions and clips each interval to its shrunk box.
   const float *cull = skip ? scene.nodeMaxOpacity : nullptr;
-  traversePartitions(scene.partitions, ray, tEnter, tExit, cull, [&](uint32_t part, float t0, float t1) {
+  traversePartitions(scene.partitions, ray, tStart, tStop, cull, [&](uint32_t part, float t0, float t1) {
     const float step =
         adaptive ? adaptiveStepSize(settings.s1, settings.s2, settings.p, scene.sigma[part]) : settings.s1;
     return march(t0, t1, step);

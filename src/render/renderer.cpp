@@ -64,6 +64,8 @@ const HostAcceleration &Renderer::host() const {
     built->tetNeighbors = buildTetNeighbors(mesh_);
     built->seeds =
         buildSeedGrid(meshView_, built->tetNeighbors.empty() ? nullptr : built->tetNeighbors.data());
+    if (!built->tetNeighbors.empty() && listsBoundaryFaces(meshView_))
+      built->boundaryFaceList = listBoundaryFaces(built->tetNeighbors);
     built->partitions = buildPartitions(meshView_, leafSize());
     hostBuildMs_ = timer.milliseconds();
     host_ = std::move(built);
@@ -214,7 +216,7 @@ void Renderer::render(const Camera &camera, const RenderSettings &settings, Fram
     frame.kernelMs = cuda_->render(view, settings.integrator, target, settings.height, samples);
 #endif
   } else {
-    samples = renderCpu(sceneView(), view, settings, target);
+    samples = renderCpu(sceneView(), host().boundaryFaceList, view, settings, target);
   }
   frame.samplesTotal = samples.total;
   frame.samplesMax = samples.max;

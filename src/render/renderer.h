@@ -14,6 +14,7 @@
 
 #include <memory>
 #include <optional>
+#include <span>
 #include <string>
 #include <utility>
 #include <vector>
@@ -55,6 +56,7 @@ struct HostAcceleration {
   OccupancyGrid occupancy;
   SeedGrid seeds;
   std::vector<uint32_t> tetNeighbors;
+  std::vector<uint32_t> boundaryFaceList; ///< for the per-frame crossings; empty where the grid lists none
   Partitions partitions;
 };
 
@@ -134,8 +136,9 @@ private:
 };
 
 /// Draws a frame with all cores: one ray per pixel, composited over `settings.background`; returns the
-/// samples taken.
-SampleTotals renderCpu(const SceneView &scene, const CameraView &camera, const RenderSettings &settings,
-                       const PixelTarget &target);
+/// samples taken. The skipping modes march each ray between its crossings with `boundaryFaces`, where these
+/// apply (see boundary_crossings.h).
+SampleTotals renderCpu(const SceneView &scene, std::span<const uint32_t> boundaryFaces,
+                       const CameraView &camera, const RenderSettings &settings, const PixelTarget &target);
 
 } // namespace uvr

@@ -156,6 +156,18 @@ __global__ void seedKernel(MeshView mesh, uint64_t cells, VoxelGrid grid, uint32
   forEachSeededVoxel(mesh, c, grid, [&](uint64_t voxel) { atomicMin(seeds + voxel, uint32_t(c)); });
 }
 
+/// Each tet face with no neighbour (a boundary face), 4 * tet + i, counted in `count` and, with `faces`
+/// given, put at the slot the count reached (the order is arbitrary).
+__global__ void listBoundaryFacesKernel(const uint32_t *tetNeighbors, uint64_t entries,
+                                        unsigned long long *count, uint32_t *faces) {
+  const uint64_t entry = globalIndex();
+  if (entry >= entries || tetNeighbors[entry] != kNoCell)
+    return;
+  const unsigned long long slot = atomicAdd(count, 1ull);
+  if (faces)
+    faces[slot] = uint32_t(entry);
+}
+
 /// Per boundary face of the tets, per voxel it meets: counts the face there (`faces` null), or puts it and
 /// the octants it meets in the voxel's next free slot (`slots`, advanced; the row's order is arbitrary).
 __global__ void boundaryFacesKernel(MeshView mesh, const uint32_t *tetNeighbors, VoxelGrid grid,
@@ -525,11 +537,12 @@ public:
       throw Error("more than 2^32 - 1 cells are not supported by the GPU build");
     if (leafSize_ == 0)
       throw Error("the partition leaf size must be at least 1");
-    Progress progress("building acceleration on the GPU", 6);
+    Progress progress("building acceleration on the GPU", 7);
     step("cell centroids", &DeviceBuilder::centroids, progress);
     step("tet adjacency", &DeviceBuilder::tetAdjacency, progress);
     step("occupancy grid", &DeviceBuilder::occupancy, progress);
     step("seed grid", &DeviceBuilder::seeds, progress);
+    step("boundary faces", &DeviceBuilder::boundaryFaceList, progress);
     step("point-location hierarchy", &DeviceBuilder::bvh, progress);
     step("partitions", &DeviceBuilder::partitions, progress);
     progress.finish();
@@ -604,6 +617,24 @@ private:
     seedKernel<<<cellBlocks(), kBlock>>>(mesh_, cells_, out_.seeds.grid, out_.seedCells.data());
     if (listsBoundaryFaces(mesh_))
       boundaryFaces();
+  }
+
+  /// Every boundary face, for the per-frame crossings: counted, then listed.
+  void boundaryFaceList() {
+    if (!listsBoundaryFaces(mesh_))
+      return;
+    const uint64_t entries = 4 * mesh_.tetCount;
+    DeviceBuffer<unsigned long long> count;
+    count.resize(1);
+    UVR_CUDA_CHECK(cudaMemset(count.data(), 0, count.bytes()));
+    listBoundaryFacesKernel<<<blocksFor(entries, kBlock), kBlock>>>(out_.tetNeighbors.data(), entries,
+                                                                    count.data(), nullptr);
+    UVR_CUDA_CHECK(cudaGetLastError());
+    out_.boundaryFaceList.resize(downloadOne(count.data()));
+    UVR_CUDA_CHECK(cudaMemset(count.data(), 0, count.bytes()));
+    listBoundaryFacesKernel<<<blocksFor(entries, kBlock), kBlock>>>(
+        out_.tetNeighbors.data(), entries, count.data(), out_.boundaryFaceList.data());
+    UVR_CUDA_CHECK(cudaGetLastError());
   }
 
   /// Compressed rows of the boundary faces per voxel, as the host lists them: counted, offset by a scan, then

@@ -24,6 +24,7 @@ struct DeviceAcceleration {
   DeviceBuffer<uint32_t> tetNeighbors;
   DeviceBuffer<BvhNode> bvhNodes;
   DeviceBuffer<uint32_t> bvhCellIds;
+  DeviceBuffer<uint32_t> boundaryFaceList; ///< every boundary face, 4 * tet + i; empty where not listed
   DeviceBuffer<uint64_t> occupancyBits;
   OccupancyView occupancy; ///< device pointer to occupancyBits
   DeviceBuffer<uint32_t> seedCells;
@@ -40,9 +41,10 @@ struct DeviceAcceleration {
   std::vector<std::pair<std::string, double>> stepMs;
 
   size_t bytes() const {
-    return tetNeighbors.bytes() + bvhNodes.bytes() + bvhCellIds.bytes() + occupancyBits.bytes() +
-           seedCells.bytes() + boundaryStart.bytes() + boundaryFaces.bytes() + boundaryOctants.bytes() +
-           kdNodes.bytes() + nodeBounds.bytes() + valueMin.bytes() + valueMax.bytes() + cellCounts.bytes();
+    return tetNeighbors.bytes() + bvhNodes.bytes() + bvhCellIds.bytes() + boundaryFaceList.bytes() +
+           occupancyBits.bytes() + seedCells.bytes() + boundaryStart.bytes() + boundaryFaces.bytes() +
+           boundaryOctants.bytes() + kdNodes.bytes() + nodeBounds.bytes() + valueMin.bytes() +
+           valueMax.bytes() + cellCounts.bytes();
   }
 };
 

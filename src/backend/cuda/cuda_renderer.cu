@@ -59,13 +59,19 @@ constexpr int kMarchingBlocksPerSm = 5, kSkippingBlocksPerSm = 4;
 template <int BlocksPerSm>
 __global__ void __launch_bounds__(kRenderBlockThreads, BlocksPerSm)
     renderKernel(SceneView scene, IntegratorSettings settings, CameraView camera, PixelTarget target,
-                 int height, SampleTotals *samples) {
+                 int height, const unsigned long long *firstCrossing, const uint32_t *lastCrossing,
+                 SampleTotals *samples) {
   const int x = int(blockIdx.x * blockDim.x + threadIdx.x);
   const int y = int(blockIdx.y * blockDim.y + threadIdx.y);
   uint32_t taken = 0; // pixels past the frame's edge take none, and still join the warp's sums below
   if (x < target.width && y < height) {
     uint32_t hint = kNoCell; // no neighbouring ray to start from: the seed grid finds the first cell
-    const RayResult result = integrateRay(scene, settings, camera.ray(x, y), hint);
+    BoundaryCrossings crossings;
+    if (firstCrossing) {
+      const uint64_t pixel = uint64_t(y) * uint64_t(target.width) + uint64_t(x);
+      crossings = pixelCrossings(firstCrossing[pixel], lastCrossing[pixel]);
+    }
+    const RayResult result = integrateRay(scene, settings, camera.ray(x, y), hint, crossings);
     target.store(x, y, result);
     taken = result.samples;
   }
@@ -81,6 +87,21 @@ __global__ void __launch_bounds__(kRenderBlockThreads, BlocksPerSm)
     atomicAdd(&samples->total, total);
     atomicMax(&samples->max, most);
   }
+}
+
+/// Each boundary face's crossings with the rays of the pixels it covers, kept per pixel: the first (least
+/// key) and the last.
+__global__ void crossingsKernel(MeshView mesh, const uint32_t *faces, uint64_t faceCount, CameraView camera,
+                                unsigned long long *firstCrossing, uint32_t *lastCrossing) {
+  const uint64_t i = uint64_t(blockIdx.x) * blockDim.x + threadIdx.x;
+  if (i >= faceCount)
+    return;
+  const uint32_t face = faces[i];
+  forEachPixelCrossing(mesh, face, camera, [&](int x, int y, float t) {
+    const uint64_t pixel = uint64_t(y) * uint64_t(camera.width) + uint64_t(x);
+    atomicMin(firstCrossing + pixel, (unsigned long long)crossingKey(t, face));
+    atomicMax(lastCrossing + pixel, floatBits(t));
+  });
 }
 
 /// Links each KD node to its parent and each partition to its leaf node, for the metadata kernel's walk up.
@@ -207,6 +228,8 @@ struct CudaRenderer::Impl {
   DeviceBuffer<float> opacity;
   DeviceBuffer<uint32_t> samples;
   DeviceBuffer<SampleTotals> sampleTotals;
+  DeviceBuffer<unsigned long long> firstCrossing;
+  DeviceBuffer<uint32_t> lastCrossing;
   PinnedBuffer staging;                                   // the frame's arrays on their way to the caller's
   cudaEvent_t kernelStart = nullptr, kernelEnd = nullptr; // around the render kernel
 
@@ -330,9 +353,24 @@ double CudaRenderer::render(const CameraView &camera, const IntegratorSettings &
   const dim3 grid((unsigned(target.width) + block.x - 1) / block.x,
                   (unsigned(height) + block.y - 1) / block.y);
   UVR_CUDA_CHECK(cudaEventRecord(d.kernelStart));
+  const uint64_t faces = d.accel.boundaryFaceList.size();
+  const bool crossings =
+      skipsSpace(settings.mode) && faces > 0 && crossingsApply(camera, d.scene.partitions.rootBounds);
+  if (crossings) {
+    d.firstCrossing.resize(pixels);
+    d.lastCrossing.resize(pixels);
+    UVR_CUDA_CHECK(cudaMemsetAsync(d.firstCrossing.data(), 0xff, d.firstCrossing.bytes())); // kNoCrossing
+    UVR_CUDA_CHECK(cudaMemsetAsync(d.lastCrossing.data(), kNoLastCrossing, d.lastCrossing.bytes()));
+    crossingsKernel<<<blocksFor(faces, kRenderBlockThreads), kRenderBlockThreads>>>(
+        d.scene.mesh, d.accel.boundaryFaceList.data(), faces, camera, d.firstCrossing.data(),
+        d.lastCrossing.data());
+    UVR_CUDA_CHECK(cudaGetLastError());
+  }
+  const unsigned long long *first = crossings ? d.firstCrossing.data() : nullptr;
+  const uint32_t *last = crossings ? d.lastCrossing.data() : nullptr;
   const auto kernel =
       skipsSpace(settings.mode) ? renderKernel<kSkippingBlocksPerSm> : renderKernel<kMarchingBlocksPerSm>;
-  kernel<<<grid, block>>>(d.scene, settings, camera, device, height, d.sampleTotals.data());
+  kernel<<<grid, block>>>(d.scene, settings, camera, device, height, first, last, d.sampleTotals.data());
   UVR_CUDA_CHECK(cudaGetLastError());
   UVR_CUDA_CHECK(cudaEventRecord(d.kernelEnd));
   UVR_CUDA_CHECK(cudaDeviceSynchronize()); // a kernel fault surfaces here
@@ -376,7 +414,8 @@ double CudaRenderer::render(const CameraView &camera, const IntegratorSettings &
 
 size_t CudaRenderer::memoryBytes() const {
   const Impl &d = *impl_;
-  return sceneBytes() + d.rgb.bytes() + d.opacity.bytes() + d.samples.bytes() + d.sampleTotals.bytes();
+  return sceneBytes() + d.rgb.bytes() + d.opacity.bytes() + d.samples.bytes() + d.sampleTotals.bytes() +
+         d.firstCrossing.bytes() + d.lastCrossing.bytes();
 }
 
 size_t CudaRenderer::sceneBytes() const {
@@ -413,6 +452,7 @@ HostAcceleration CudaRenderer::acceleration() const {
   seeds.boundaryFaces = copy(accel.boundaryFaces);
   seeds.boundaryOctants = copy(accel.boundaryOctants);
   seeds.grid = accel.seeds.grid;
+  out.boundaryFaceList = copy(accel.boundaryFaceList);
   Partitions &parts = out.partitions;
   parts.nodes = copy(accel.kdNodes);
   parts.nodeBounds = copy(accel.nodeBounds);
