@@ -344,22 +344,64 @@ TEST_P(Integrator, BoundaryCrossingsLeaveTheImageAsItIs) {
   const RenderSettings settings = settingsFor(RenderMode::Skip, 0.013f);
   const CameraView view = makeCameraView(obliqueCamera(), settings.width, settings.height);
   ASSERT_TRUE(crossingsApply(view, renderer.partitions().rootBounds));
-  std::vector<uint64_t> first;
-  std::vector<uint32_t> last;
-  findBoundaryCrossings(makeMeshView(mesh, -1), listBoundaryFaces(buildTetNeighbors(mesh)), view, first,
-                        last);
+  std::vector<uint64_t> start, keys;
+  findBoundaryCrossings(makeMeshView(mesh, -1), listBoundaryFaces(buildTetNeighbors(mesh)), view, start,
+                        keys);
   const Frame skip = renderer.render(obliqueCamera(), settings);
   int uncrossed = 0;
-  for (size_t pixel = 0; pixel < first.size(); ++pixel)
-    if (first[pixel] == kNoCrossing) {
+  for (size_t pixel = 0; pixel + 2 < start.size(); ++pixel)
+    if (start[pixel] == start[pixel + 1]) {
       EXPECT_EQ(skip.samplesPerPixel[pixel], 0u) << "pixel " << pixel;
       ++uncrossed;
     }
   EXPECT_GT(uncrossed, 0);
 }
 
-// Each pixel's first and last crossing with the boundary faces, against every face tested in double
-// precision: the projected boxes leave out no pixel whose ray crosses a face.
+// Two slabs with empty space between them, seen across both: the skipping modes take no sample in the gap,
+// which the ray leaves the mesh into and enters it again from, and still give `reference`'s image.
+TEST_P(Integrator, GapsBetweenBoundaryCrossingsTakeNoSample) {
+  Mesh mesh = buildMesh(makeBoxGrid(CellType::Tetra, 10, kBox, radial), "slabs");
+  UninitVector<uint32_t> kept;
+  for (size_t c = 0; c < mesh.tets.size(); c += 4) {
+    float z = 0.f;
+    for (int i = 0; i < 4; ++i)
+      z += 0.25f * mesh.points[mesh.tets[c + size_t(i)]].z;
+    if (std::fabs(z) > 0.5f) // the gap is at least 0.6 wide: cells are 0.2 on a side
+      kept.insert(kept.end(), mesh.tets.begin() + long(c), mesh.tets.begin() + long(c) + 4);
+  }
+  mesh.tets = std::move(kept);
+  Renderer renderer(mesh, mesh.findField("f"), 32);
+  renderer.setTransferFunction(TransferFunction(constantMap(0.05f), 0.f, 1.f));
+  Camera along;
+  along.eye = {0.13f, 0.07f, 5.f};
+  along.at = {0.f, 0.f, 0.f};
+  along.fovy = 12.f;
+  const float s1 = 0.02f;
+  auto settings = [&](RenderMode mode) {
+    RenderSettings chosen = settingsFor(mode, s1);
+    chosen.integrator.terminationOpacity = 2.f; // every ray goes through both slabs
+    return chosen;
+  };
+  const Frame reference = renderer.render(along, settings(RenderMode::Reference));
+  for (RenderMode mode : {RenderMode::Skip, RenderMode::Full}) {
+    const Frame frame = renderer.render(along, settings(mode));
+    expectSameFrame(reference, frame, 1e-5f, 1);
+    // Rays through both slabs cross 2 - 0.6 of mesh at most, where `reference` takes a sample every s1 of
+    // the box's 2.
+    int across = 0;
+    for (size_t pixel = 0; pixel < frame.samplesPerPixel.size(); ++pixel) {
+      if (reference.samplesPerPixel[pixel] < uint32_t(1.9f / s1))
+        continue;
+      ++across;
+      EXPECT_LE(frame.samplesPerPixel[pixel], uint32_t(1.4f / s1) + 2) << "pixel " << pixel;
+    }
+    EXPECT_GT(across, 1000);
+  }
+}
+
+// Each pixel's crossings with the boundary faces, against every face tested in double precision: the
+// projected boxes leave out no pixel whose ray crosses a face, the crossings come in order of t, and each
+// says rightly whether the ray leaves the mesh there.
 TEST(BoundaryCrossings, FindEachRaysFirstAndLastCrossing) {
   const Mesh mesh = notchedShell();
   const MeshView view = makeMeshView(mesh, -1);
@@ -367,11 +409,10 @@ TEST(BoundaryCrossings, FindEachRaysFirstAndLastCrossing) {
   ASSERT_GT(faces.size(), 1000u);
   const CameraView camera =
       makeCameraView(obliqueCamera(), 53, 41); // odd and unequal: no symmetry hides a swap
-  std::vector<uint64_t> first;
-  std::vector<uint32_t> last;
-  findBoundaryCrossings(view, faces, camera, first, last);
-  ASSERT_EQ(first.size(), 53u * 41u);
-  ASSERT_EQ(last.size(), first.size());
+  std::vector<uint64_t> start, keys;
+  findBoundaryCrossings(view, faces, camera, start, keys);
+  ASSERT_EQ(start.size(), 53u * 41u + 2u);
+  ASSERT_EQ(start.back(), keys.size());
   using Vec3d = std::array<double, 3>;
   auto sub = [](Vec3d a, Vec3d b) { return Vec3d{a[0] - b[0], a[1] - b[1], a[2] - b[2]}; };
   auto dot3 = [](Vec3d a, Vec3d b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; };
@@ -379,11 +420,16 @@ TEST(BoundaryCrossings, FindEachRaysFirstAndLastCrossing) {
     return Vec3d{a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
   };
   auto widen = [](Vec3f p) { return Vec3d{p.x, p.y, p.z}; };
-  int crossed = 0, grazed = 0, edgeOnly = 0;
+  // t without the exit flag kept in its lowest bit.
+  auto bare = [](float t) { return floatBits(t) & ~1u; };
+  int crossed = 0, grazed = 0, edgeOnly = 0, inner = 0;
   for (int y = 0; y < camera.height; ++y)
     for (int x = 0; x < camera.width; ++x) {
       const Ray ray = camera.ray(x, y);
       const Vec3d o = widen(ray.origin), d = widen(ray.direction);
+      const size_t pixel = size_t(y) * size_t(camera.width) + size_t(x);
+      const BoundaryCrossings found = pixelCrossings(start.data(), keys.data(), pixel);
+      ASSERT_TRUE(std::is_sorted(found.keys, found.keys + found.count)) << "pixel " << x << "," << y;
       double least = INFINITY, most = -INFINITY;
       for (uint32_t face : faces) {
         Vec3f a, b, c;
@@ -392,11 +438,23 @@ TEST(BoundaryCrossings, FindEachRaysFirstAndLastCrossing) {
         const Vec3d pv = cross3(d, e2), qv = cross3(tv, e1);
         const double det = dot3(e1, pv);
         const double u = dot3(tv, pv) / det, v = dot3(d, qv) / det, t = dot3(e2, qv) / det;
-        if (det != 0.0 && u >= 0.0 && v >= 0.0 && u + v <= 1.0 && t > 0.0)
-          least = std::min(least, t), most = std::max(most, t);
+        if (!(det != 0.0 && u >= 0.0 && v >= 0.0 && u + v <= 1.0 && t > 0.0))
+          continue;
+        least = std::min(least, t), most = std::max(most, t);
+        if (!(u > 1e-3 && v > 1e-3 && u + v < 1.0 - 1e-3))
+          continue;
+        // A crossing well inside its face is listed, saying whether the ray leaves the mesh there: whether it
+        // runs along the face's normal pointing away from the tet's fourth corner.
+        ++inner;
+        const Vec3d normal = cross3(e1, e2);
+        const Vec3f fourth = view.points[view.tets[4 * size_t(face >> 2) + (face & 3u)]];
+        const bool outward = dot3(normal, sub(widen(fourth), widen(a))) < 0.0;
+        const bool exits = (dot3(d, normal) > 0.0) == outward;
+        const uint64_t *listed = std::find_if(found.keys, found.keys + found.count,
+                                              [&](uint64_t key) { return crossingFace(key) == face; });
+        ASSERT_NE(listed, found.keys + found.count) << "pixel " << x << "," << y << ", face " << face;
+        EXPECT_EQ(crossingExits(*listed), exits) << "pixel " << x << "," << y << ", face " << face;
       }
-      const size_t pixel = size_t(y) * size_t(camera.width) + size_t(x);
-      const BoundaryCrossings found = pixelCrossings(first[pixel], last[pixel]);
       if (least == INFINITY) {
         edgeOnly += found.first != INFINITY; // within the edge tolerance of a face, and no more
         continue;
@@ -410,9 +468,10 @@ TEST(BoundaryCrossings, FindEachRaysFirstAndLastCrossing) {
       grazed += found.first < least - 1e-3 || found.last > most + 1e-3;
       Vec3f a, b, c;
       tetFaceCorners(view, found.face, a, b, c);
-      EXPECT_EQ(rayCrossesTriangle(ray, a, b, c), found.first) << "pixel " << x << "," << y;
+      EXPECT_EQ(bare(rayCrossesTriangle(ray, a, b, c)), bare(found.first)) << "pixel " << x << "," << y;
     }
   EXPECT_GT(crossed, 500);
+  EXPECT_GT(inner, 2 * crossed); // the shell's cavity: most rays cross four times
   EXPECT_LT(crossed, 53 * 41 - 200) << "too few rays miss the mesh to test";
   EXPECT_LE(grazed + edgeOnly, crossed / 50) << grazed << " grazing, " << edgeOnly << " at an edge alone";
 }

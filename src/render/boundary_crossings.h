@@ -1,7 +1,8 @@
-// Where each pixel's ray crosses the boundary of a tet mesh first and last, found per frame by projecting
-// the boundary faces (tet faces with no neighbour) onto the image and testing each against the rays of the
-// pixels it covers. Before its first crossing and after its last, a ray that starts outside the mesh meets
-// no cell: the skipping modes march neither stretch, and a ray that crosses no face is done at once. Faces
+// Where each pixel's ray crosses the boundary of a tet mesh, found per frame by projecting the boundary faces
+// (tet faces with no neighbour) onto the image and testing each against the rays of the pixels it covers.
+// Before its first crossing, after its last, and between a crossing out of the mesh and the next one back
+// in, a ray that starts outside the mesh meets no cell: the skipping modes march none of those stretches, a
+// ray that crosses no face is done at once, and the march past a gap starts at the tet it enters by. Faces
 // are tested against the very rays the integrator shoots, with a tolerance at their edges, so a ray through
 // an edge or a corner shared by faces crosses at least one of them.
 #pragma once
@@ -19,11 +20,13 @@
 
 namespace uvr {
 
-/// Along one ray: its first and last crossing with the boundary, and the face crossed first. The default
-/// says nothing is known.
+/// Along one ray: its first and last crossing with the boundary, the face crossed first, and every crossing
+/// in order of t (see crossingKey). The default says nothing is known.
 struct BoundaryCrossings {
   float first = -INFINITY, last = INFINITY; ///< first = INFINITY: the ray crosses no face
   uint32_t face = kNoCell;                  ///< 4 * tet + i
+  const uint64_t *keys = nullptr;
+  uint32_t count = 0;
 };
 
 /// Where `ray` crosses the plane of triangle abc, if it does so within the triangle or within a relative
@@ -57,21 +60,48 @@ UVR_HOST_DEVICE inline float bitsFloat(uint32_t bits) {
 }
 
 /// A crossing as one word whose order is that of t (positive, so its bits order as it does), then of the
-/// face: the first crossing of a pixel is the least word, whatever order the faces arrive in.
-UVR_HOST_DEVICE inline uint64_t crossingKey(float t, uint32_t face) {
-  return (uint64_t(floatBits(t)) << 32) | face;
+/// face: sorting a pixel's words orders its crossings along the ray, whatever order the faces arrive in. The
+/// lowest bit of t's says whether the ray leaves the mesh there (a change of t by one unit in the last
+/// place).
+UVR_HOST_DEVICE inline uint64_t crossingKey(float t, uint32_t face, bool exits) {
+  return (uint64_t((floatBits(t) & ~1u) | (exits ? 1u : 0u)) << 32) | face;
 }
-/// Per pixel, before any face is seen: the least key is the first crossing, the largest bits the last.
-constexpr uint64_t kNoCrossing = ~uint64_t(0);
-constexpr uint32_t kNoLastCrossing = 0; // the bits of +0
+UVR_HOST_DEVICE inline float crossingT(uint64_t key) { return bitsFloat(uint32_t(key >> 32)); }
+UVR_HOST_DEVICE inline uint32_t crossingFace(uint64_t key) { return uint32_t(key); }
+UVR_HOST_DEVICE inline bool crossingExits(uint64_t key) { return (key >> 32) & 1u; }
 
-/// What a pixel's least key and largest bits say about its ray.
-UVR_HOST_DEVICE inline BoundaryCrossings pixelCrossings(uint64_t firstKey, uint32_t lastBits) {
+/// What pixel `pixel`'s crossings, keys[start[pixel]] to keys[start[pixel + 1]] in order, say about its ray.
+UVR_HOST_DEVICE inline BoundaryCrossings pixelCrossings(const uint64_t *start, const uint64_t *keys,
+                                                        uint64_t pixel) {
   BoundaryCrossings crossings;
-  crossings.first = firstKey == kNoCrossing ? INFINITY : bitsFloat(uint32_t(firstKey >> 32));
-  crossings.last = bitsFloat(lastBits);
-  crossings.face = firstKey == kNoCrossing ? kNoCell : uint32_t(firstKey);
+  crossings.keys = keys + start[pixel];
+  crossings.count = uint32_t(start[pixel + 1] - start[pixel]);
+  if (crossings.count == 0) {
+    crossings.first = INFINITY;
+    return crossings;
+  }
+  crossings.first = crossingT(crossings.keys[0]);
+  crossings.last = crossingT(crossings.keys[crossings.count - 1]);
+  crossings.face = crossingFace(crossings.keys[0]);
   return crossings;
+}
+
+/// Where the ray leaves the gap in the mesh that holds t, if it lies in one: the crossing after the last one
+/// at or before t, where the ray goes out of the mesh and that one back in, and t lies farther than `margin`
+/// from both; else t. `next` is where the search starts among the keys, and is left at the first crossing
+/// past t: along a ray, t only grows. `entered` is set to the face the ray comes back in by.
+UVR_HOST_DEVICE inline float afterGap(const BoundaryCrossings &crossings, float t, float margin,
+                                      uint32_t &next, uint32_t &entered) {
+  while (next < crossings.count && crossingT(crossings.keys[next]) <= t)
+    ++next;
+  if (next == 0 || next == crossings.count)
+    return t; // before the first crossing or after the last: the march's interval leaves those out
+  const uint64_t before = crossings.keys[next - 1], after = crossings.keys[next];
+  if (!crossingExits(before) || crossingExits(after) || !(t > crossingT(before) + margin) ||
+      !(t < crossingT(after) - margin))
+    return t;
+  entered = crossingFace(after);
+  return crossingT(after) - margin;
 }
 
 /// Whether the crossings describe the frame: the eye lies outside `meshBox` (so every ray starts outside
@@ -89,14 +119,21 @@ UVR_HOST_DEVICE inline bool crossingsApply(const CameraView &camera, const Box3f
   return true;
 }
 
-/// Calls `visit(x, y, t)` for each pixel whose ray crosses boundary face `face` at t > 0: the pixels whose
-/// centres lie in the face's projected box, widened by a twentieth of a pixel for rounding and the edge
-/// tolerance (a relative 1e-4 of the face, far less for all but faces spanning hundreds of pixels).
+/// Calls `visit(pixel, key)` for each pixel whose ray crosses boundary face `face` at t > 0 (`key` being
+/// crossingKey's): the pixels whose centres lie in the face's projected box, widened by a twentieth of a
+/// pixel for rounding and the edge tolerance (a relative 1e-4 of the face, far less for all but faces
+/// spanning hundreds of pixels).
 template <typename Visit>
 UVR_HOST_DEVICE void forEachPixelCrossing(const MeshView &mesh, uint32_t face, const CameraView &camera,
                                           Visit &&visit) {
   Vec3f corners[3];
   tetFaceCorners(mesh, face, corners[0], corners[1], corners[2]);
+  // Every ray from the eye that crosses the face's plane runs the same way along its normal: out of the mesh
+  // where the eye lies on the inner side, the side of the tet's fourth corner.
+  const Vec3f normal = cross(corners[1] - corners[0], corners[2] - corners[0]);
+  const Vec3f opposite = mesh.points[mesh.tets[4 * uint64_t(face >> 2) + (face & 3u)]];
+  const bool exits =
+      (dot(normal, opposite - corners[0]) < 0.f) == (dot(normal, corners[0] - camera.eye) > 0.f);
   const float rightScale = 1.f / dot(camera.right, camera.right), upScale = 1.f / dot(camera.up, camera.up);
   float xLow = INFINITY, xHigh = -INFINITY, yLow = INFINITY, yHigh = -INFINITY;
   for (const Vec3f &p : corners) {
@@ -117,13 +154,14 @@ UVR_HOST_DEVICE void forEachPixelCrossing(const MeshView &mesh, uint32_t face, c
     for (int x = x0; x <= x1; ++x) {
       const float t = rayCrossesTriangle(camera.ray(x, y), corners[0], corners[1], corners[2]);
       if (t > 0.f && t < INFINITY)
-        visit(x, y, t);
+        visit(uint64_t(y) * uint64_t(camera.width) + uint64_t(x), crossingKey(t, face, exits));
     }
 }
 
-/// Per pixel of `camera`'s image, the least crossing key over all `faces` (kNoCrossing where none) into
-/// `first`, and the bits of the last crossing (kNoLastCrossing where none) into `last`; with all cores.
+/// Every crossing of each pixel's ray of `camera`'s image with `faces`: pixel p's keys are keys[start[p]]
+/// to keys[start[p + 1]], ordered by t (start has two entries more than the image has pixels, the last
+/// being the total); with all cores.
 void findBoundaryCrossings(const MeshView &mesh, std::span<const uint32_t> faces, const CameraView &camera,
-                           std::vector<uint64_t> &first, std::vector<uint32_t> &last);
+                           std::vector<uint64_t> &start, std::vector<uint64_t> &keys);
 
 } // namespace uvr

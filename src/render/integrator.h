@@ -173,7 +173,7 @@ struct RayResult {
 /// changes no sample that contributes, and a step of s1 reproduces the fixed-step samples exactly. `hint` is
 /// a cell near the ray's first sample (the neighbouring pixel's: rays are coherent), or kNoCell; it is
 /// updated to this ray's first cell. The skipping modes march only between the ray's first and last boundary
-/// crossings, where `crossings` knows them.
+/// crossings, and not through the gaps between them that lie outside the mesh, where `crossings` knows them.
 UVR_HOST_DEVICE inline RayResult integrateRay(const SceneView &scene, const IntegratorSettings &settings,
                                               const Ray &ray, uint32_t &hint,
                                               const BoundaryCrossings &crossings) {
@@ -189,17 +189,22 @@ UVR_HOST_DEVICE inline RayResult integrateRay(const SceneView &scene, const Inte
   at.cell = hint;
   bool first = true;
   float tStart = tEnter, tStop = tExit;
+  // A hundredth of a step of slack at crossings: rounding never leaves out a sample that `reference` finds in
+  // a cell.
+  const float margin = 0.01f * settings.s1;
   if (skip) {
     if (crossings.first == INFINITY)
       return result;
-    // A hundredth of a step of slack: rounding never leaves out a sample that `reference` finds in a cell.
-    const float margin = 0.01f * settings.s1;
     tStart = maxf(tEnter, crossings.first - margin);
     tStop = minf(tExit, crossings.last + margin);
     if (crossings.face != kNoCell)
       at.cell = crossings.face >> 2;
   }
   const float s1 = settings.s1;
+  // Grid points in the gaps between the ray's crossings out of the mesh and back in are passed over; the
+  // march goes on from the tet the ray re-enters by. nextCrossing follows the march along the crossings.
+  const bool gaps = skip && crossings.count > 1;
+  uint32_t nextCrossing = 0;
   // The index of the first grid point at or after t.
   auto gridIndex = [&](float t) {
     float k = ceilf((t - tEnter) / s1);
@@ -222,6 +227,18 @@ UVR_HOST_DEVICE inline RayResult integrateRay(const SceneView &scene, const Inte
     const int walkSteps = 8 * int(stride);
     const bool far = stride * s1 > scene.seeds.grid.voxelEdge();
     for (float t = tEnter + k * s1; t < tb; k += stride, t = tEnter + k * s1) {
+      if (gaps) {
+        uint32_t entered;
+        const float resume = afterGap(crossings, t, margin, nextCrossing, entered);
+        if (resume > t) {
+          k = gridIndex(resume);
+          t = tEnter + k * s1;
+          at.cell = entered >> 2;
+          at.affine = false;
+          if (!(t < tb))
+            break;
+        }
+      }
       ++result.samples;
       float value;
       if (!locateSample(scene, skip, ray, t, walkSteps, far, at, value))

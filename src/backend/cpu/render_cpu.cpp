@@ -13,36 +13,36 @@ namespace uvr {
 
 SampleTotals renderCpu(const SceneView &scene, std::span<const uint32_t> boundaryFaces,
                        const CameraView &camera, const RenderSettings &settings, const PixelTarget &target) {
-  std::vector<uint64_t> firstCrossing;
-  std::vector<uint32_t> lastCrossing;
+  std::vector<uint64_t> crossingStart, crossingKeys;
   const bool crossings = skipsSpace(settings.integrator.mode) && !boundaryFaces.empty() &&
                          crossingsApply(camera, scene.partitions.rootBounds);
   if (crossings)
-    findBoundaryCrossings(scene.mesh, boundaryFaces, camera, firstCrossing, lastCrossing);
+    findBoundaryCrossings(scene.mesh, boundaryFaces, camera, crossingStart, crossingKeys);
   std::atomic<unsigned long long> total{0};
   std::atomic<uint32_t> max{0};
   // Small tiles: rays through dense parts of the mesh cost far more than others, so balance finely.
   constexpr int kTile = 16;
-  tbb::parallel_for(
-      tbb::blocked_range2d<int>(0, settings.height, kTile, 0, settings.width, kTile),
-      [&](const tbb::blocked_range2d<int> &tile) {
-        uint32_t hint = kNoCell;
-        SampleTotals tileSamples;
-        for (int y = tile.rows().begin(); y < tile.rows().end(); ++y)
-          for (int x = tile.cols().begin(); x < tile.cols().end(); ++x) {
-            const size_t pixel = size_t(y) * size_t(settings.width) + size_t(x);
-            const BoundaryCrossings along =
-                crossings ? pixelCrossings(firstCrossing[pixel], lastCrossing[pixel]) : BoundaryCrossings{};
-            const RayResult result = integrateRay(scene, settings.integrator, camera.ray(x, y), hint, along);
-            target.store(x, y, result);
-            tileSamples.total += result.samples;
-            tileSamples.max = std::max(tileSamples.max, result.samples);
-          }
-        total += tileSamples.total;
-        for (uint32_t seen = max;
-             seen < tileSamples.max && !max.compare_exchange_weak(seen, tileSamples.max);)
-          ;
-      });
+  tbb::parallel_for(tbb::blocked_range2d<int>(0, settings.height, kTile, 0, settings.width, kTile),
+                    [&](const tbb::blocked_range2d<int> &tile) {
+                      uint32_t hint = kNoCell;
+                      SampleTotals tileSamples;
+                      for (int y = tile.rows().begin(); y < tile.rows().end(); ++y)
+                        for (int x = tile.cols().begin(); x < tile.cols().end(); ++x) {
+                          const size_t pixel = size_t(y) * size_t(settings.width) + size_t(x);
+                          const BoundaryCrossings along =
+                              crossings ? pixelCrossings(crossingStart.data(), crossingKeys.data(), pixel)
+                                        : BoundaryCrossings{};
+                          const RayResult result =
+                              integrateRay(scene, settings.integrator, camera.ray(x, y), hint, along);
+                          target.store(x, y, result);
+                          tileSamples.total += result.samples;
+                          tileSamples.max = std::max(tileSamples.max, result.samples);
+                        }
+                      total += tileSamples.total;
+                      for (uint32_t seen = max;
+                           seen < tileSamples.max && !max.compare_exchange_weak(seen, tileSamples.max);)
+                        ;
+                    });
   return {total, max};
 }
 

@@ -68,20 +68,6 @@ __global__ void indicesKernel(uint64_t count, uint32_t *indices) {
     indices[i] = uint32_t(i);
 }
 
-/// Temporary storage for cub's device-wide algorithms, kept across calls.
-class CubScratch {
-public:
-  template <typename Run> void run(Run &&algorithm) {
-    size_t bytes = 0;
-    UVR_CUDA_CHECK(algorithm(nullptr, bytes));
-    storage_.grow(bytes, 0);
-    UVR_CUDA_CHECK(algorithm(storage_.data(), bytes));
-  }
-
-private:
-  DeviceBuffer<uint8_t> storage_;
-};
-
 template <typename T> T downloadOne(const T *device) {
   T value;
   UVR_CUDA_CHECK(cudaMemcpy(&value, device, sizeof(T), cudaMemcpyDeviceToHost));

@@ -6,6 +6,8 @@
 #include "core/timer.h"
 
 #include <cub/block/block_reduce.cuh>
+#include <cub/device/device_scan.cuh>
+#include <cub/device/device_segmented_sort.cuh>
 #include <cuda_runtime.h>
 
 #include <tbb/blocked_range.h>
@@ -59,7 +61,7 @@ constexpr int kMarchingBlocksPerSm = 5, kSkippingBlocksPerSm = 4;
 template <int BlocksPerSm>
 __global__ void __launch_bounds__(kRenderBlockThreads, BlocksPerSm)
     renderKernel(SceneView scene, IntegratorSettings settings, CameraView camera, PixelTarget target,
-                 int height, const unsigned long long *firstCrossing, const uint32_t *lastCrossing,
+                 int height, const uint64_t *crossingStart, const uint64_t *crossingKeys,
                  SampleTotals *samples) {
   const int x = int(blockIdx.x * blockDim.x + threadIdx.x);
   const int y = int(blockIdx.y * blockDim.y + threadIdx.y);
@@ -67,10 +69,9 @@ __global__ void __launch_bounds__(kRenderBlockThreads, BlocksPerSm)
   if (x < target.width && y < height) {
     uint32_t hint = kNoCell; // no neighbouring ray to start from: the seed grid finds the first cell
     BoundaryCrossings crossings;
-    if (firstCrossing) {
-      const uint64_t pixel = uint64_t(y) * uint64_t(target.width) + uint64_t(x);
-      crossings = pixelCrossings(firstCrossing[pixel], lastCrossing[pixel]);
-    }
+    if (crossingStart)
+      crossings =
+          pixelCrossings(crossingStart, crossingKeys, uint64_t(y) * uint64_t(target.width) + uint64_t(x));
     const RayResult result = integrateRay(scene, settings, camera.ray(x, y), hint, crossings);
     target.store(x, y, result);
     taken = result.samples;
@@ -89,18 +90,19 @@ __global__ void __launch_bounds__(kRenderBlockThreads, BlocksPerSm)
   }
 }
 
-/// Each boundary face's crossings with the rays of the pixels it covers, kept per pixel: the first (least
-/// key) and the last.
+/// Each boundary face's crossings with the rays of the pixels it covers: with no `keys`, counted into
+/// start[pixel + 1]; with them, placed at start[pixel + 1], which moves on by one each (findBoundaryCrossings
+/// says how start's entries change).
 __global__ void crossingsKernel(MeshView mesh, const uint32_t *faces, uint64_t faceCount, CameraView camera,
-                                unsigned long long *firstCrossing, uint32_t *lastCrossing) {
+                                uint64_t *start, uint64_t *keys) {
   const uint64_t i = uint64_t(blockIdx.x) * blockDim.x + threadIdx.x;
   if (i >= faceCount)
     return;
-  const uint32_t face = faces[i];
-  forEachPixelCrossing(mesh, face, camera, [&](int x, int y, float t) {
-    const uint64_t pixel = uint64_t(y) * uint64_t(camera.width) + uint64_t(x);
-    atomicMin(firstCrossing + pixel, (unsigned long long)crossingKey(t, face));
-    atomicMax(lastCrossing + pixel, floatBits(t));
+  auto *slots = reinterpret_cast<unsigned long long *>(start) + 1;
+  forEachPixelCrossing(mesh, faces[i], camera, [&](uint64_t pixel, uint64_t key) {
+    const unsigned long long slot = atomicAdd(slots + pixel, 1ull);
+    if (keys)
+      keys[slot] = key;
   });
 }
 
@@ -228,8 +230,8 @@ struct CudaRenderer::Impl {
   DeviceBuffer<float> opacity;
   DeviceBuffer<uint32_t> samples;
   DeviceBuffer<SampleTotals> sampleTotals;
-  DeviceBuffer<unsigned long long> firstCrossing;
-  DeviceBuffer<uint32_t> lastCrossing;
+  DeviceBuffer<uint64_t> crossingStart, crossingKeys, placedCrossings; // see findBoundaryCrossings
+  CubScratch scratch;
   PinnedBuffer staging;                                   // the frame's arrays on their way to the caller's
   cudaEvent_t kernelStart = nullptr, kernelEnd = nullptr; // around the render kernel
 
@@ -336,6 +338,36 @@ PartitionMetadata CudaRenderer::metadata() const {
   return meta;
 }
 
+void CudaRenderer::findCrossings(const CameraView &camera, size_t pixels) {
+  Impl &d = *impl_;
+  const uint64_t faces = d.accel.boundaryFaceList.size();
+  const unsigned blocks = blocksFor(faces, kRenderBlockThreads);
+  // As on the host: counted, placed from each pixel's start on, ordered pixel by pixel.
+  d.crossingStart.resize(pixels + 2);
+  UVR_CUDA_CHECK(cudaMemsetAsync(d.crossingStart.data(), 0, d.crossingStart.bytes()));
+  crossingsKernel<<<blocks, kRenderBlockThreads>>>(d.scene.mesh, d.accel.boundaryFaceList.data(), faces,
+                                                   camera, d.crossingStart.data(), nullptr);
+  UVR_CUDA_CHECK(cudaGetLastError());
+  uint64_t *counts = d.crossingStart.data() + 1;
+  d.scratch.run([&](void *storage, size_t &bytes) {
+    return cub::DeviceScan::ExclusiveSum(storage, bytes, counts, counts, int64_t(pixels + 1));
+  });
+  uint64_t total = 0;
+  UVR_CUDA_CHECK(cudaMemcpy(&total, counts + pixels, sizeof total, cudaMemcpyDeviceToHost));
+  if (total == 0)
+    return;
+  d.placedCrossings.grow(total, 0);
+  d.crossingKeys.grow(total, 0);
+  crossingsKernel<<<blocks, kRenderBlockThreads>>>(d.scene.mesh, d.accel.boundaryFaceList.data(), faces,
+                                                   camera, d.crossingStart.data(), d.placedCrossings.data());
+  UVR_CUDA_CHECK(cudaGetLastError());
+  const uint64_t *start = d.crossingStart.data();
+  d.scratch.run([&](void *storage, size_t &bytes) {
+    return cub::DeviceSegmentedSort::SortKeys(storage, bytes, d.placedCrossings.data(), d.crossingKeys.data(),
+                                              int64_t(total), int64_t(pixels), start, start + 1);
+  });
+}
+
 double CudaRenderer::render(const CameraView &camera, const IntegratorSettings &settings,
                             const PixelTarget &target, int height, SampleTotals &samples) {
   Impl &d = *impl_;
@@ -356,21 +388,13 @@ double CudaRenderer::render(const CameraView &camera, const IntegratorSettings &
   const uint64_t faces = d.accel.boundaryFaceList.size();
   const bool crossings =
       skipsSpace(settings.mode) && faces > 0 && crossingsApply(camera, d.scene.partitions.rootBounds);
-  if (crossings) {
-    d.firstCrossing.resize(pixels);
-    d.lastCrossing.resize(pixels);
-    UVR_CUDA_CHECK(cudaMemsetAsync(d.firstCrossing.data(), 0xff, d.firstCrossing.bytes())); // kNoCrossing
-    UVR_CUDA_CHECK(cudaMemsetAsync(d.lastCrossing.data(), kNoLastCrossing, d.lastCrossing.bytes()));
-    crossingsKernel<<<blocksFor(faces, kRenderBlockThreads), kRenderBlockThreads>>>(
-        d.scene.mesh, d.accel.boundaryFaceList.data(), faces, camera, d.firstCrossing.data(),
-        d.lastCrossing.data());
-    UVR_CUDA_CHECK(cudaGetLastError());
-  }
-  const unsigned long long *first = crossings ? d.firstCrossing.data() : nullptr;
-  const uint32_t *last = crossings ? d.lastCrossing.data() : nullptr;
+  if (crossings)
+    findCrossings(camera, pixels);
+  const uint64_t *crossingStart = crossings ? d.crossingStart.data() : nullptr;
   const auto kernel =
       skipsSpace(settings.mode) ? renderKernel<kSkippingBlocksPerSm> : renderKernel<kMarchingBlocksPerSm>;
-  kernel<<<grid, block>>>(d.scene, settings, camera, device, height, first, last, d.sampleTotals.data());
+  kernel<<<grid, block>>>(d.scene, settings, camera, device, height, crossingStart, d.crossingKeys.data(),
+                          d.sampleTotals.data());
   UVR_CUDA_CHECK(cudaGetLastError());
   UVR_CUDA_CHECK(cudaEventRecord(d.kernelEnd));
   UVR_CUDA_CHECK(cudaDeviceSynchronize()); // a kernel fault surfaces here
@@ -415,7 +439,7 @@ double CudaRenderer::render(const CameraView &camera, const IntegratorSettings &
 size_t CudaRenderer::memoryBytes() const {
   const Impl &d = *impl_;
   return sceneBytes() + d.rgb.bytes() + d.opacity.bytes() + d.samples.bytes() + d.sampleTotals.bytes() +
-         d.firstCrossing.bytes() + d.lastCrossing.bytes();
+         d.crossingStart.bytes() + d.crossingKeys.bytes() + d.placedCrossings.bytes();
 }
 
 size_t CudaRenderer::sceneBytes() const {

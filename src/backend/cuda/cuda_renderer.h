@@ -52,6 +52,9 @@ public:
   const std::string &deviceName() const;
 
 private:
+  /// Every pixel's boundary crossings for `camera`, into the crossing buffers (see findBoundaryCrossings).
+  void findCrossings(const CameraView &camera, size_t pixels);
+
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };

@@ -85,4 +85,19 @@ inline unsigned blocksFor(uint64_t threads, int block) {
   return unsigned((threads + uint64_t(block) - 1) / uint64_t(block));
 }
 
+/// Temporary storage for cub's device-wide algorithms, kept across calls: `algorithm(storage, bytes)` is
+/// called once with no storage to size it, then with it.
+class CubScratch {
+public:
+  template <typename Run> void run(Run &&algorithm) {
+    size_t bytes = 0;
+    UVR_CUDA_CHECK(algorithm(nullptr, bytes));
+    storage_.grow(bytes, 0);
+    UVR_CUDA_CHECK(algorithm(storage_.data(), bytes));
+  }
+
+private:
+  DeviceBuffer<uint8_t> storage_;
+};
+
 } // namespace uvr
