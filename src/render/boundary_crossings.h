@@ -29,25 +29,6 @@ struct BoundaryCrossings {
   uint32_t count = 0;
 };
 
-/// Where `ray` crosses the plane of triangle abc, if it does so within the triangle or within a relative
-/// 1e-4 of its edges; INFINITY otherwise, and for a ray parallel to the plane.
-UVR_HOST_DEVICE inline float rayCrossesTriangle(const Ray &ray, Vec3f a, Vec3f b, Vec3f c) {
-  const Vec3f e1 = b - a, e2 = c - a;
-  const Vec3f pv = cross(ray.direction, e2);
-  const float det = dot(e1, pv);
-  if (det == 0.f)
-    return INFINITY;
-  const float inv = 1.f / det;
-  const Vec3f tv = ray.origin - a;
-  const float u = dot(tv, pv) * inv;
-  const Vec3f qv = cross(tv, e1);
-  const float v = dot(ray.direction, qv) * inv;
-  constexpr float kEdgeTolerance = 1e-4f;
-  if (!(u >= -kEdgeTolerance && v >= -kEdgeTolerance && u + v <= 1.f + kEdgeTolerance))
-    return INFINITY;
-  return dot(e2, qv) * inv;
-}
-
 UVR_HOST_DEVICE inline uint32_t floatBits(float f) {
   uint32_t bits;
   memcpy(&bits, &f, sizeof bits);
@@ -128,12 +109,12 @@ UVR_HOST_DEVICE void forEachPixelCrossing(const MeshView &mesh, uint32_t face, c
                                           Visit &&visit) {
   Vec3f corners[3];
   tetFaceCorners(mesh, face, corners[0], corners[1], corners[2]);
+  const Vec3f e1 = corners[1] - corners[0], e2 = corners[2] - corners[0], toEye = camera.eye - corners[0];
   // Every ray from the eye that crosses the face's plane runs the same way along its normal: out of the mesh
   // where the eye lies on the inner side, the side of the tet's fourth corner.
-  const Vec3f normal = cross(corners[1] - corners[0], corners[2] - corners[0]);
+  const Vec3f normal = cross(e1, e2);
   const Vec3f opposite = mesh.points[mesh.tets[4 * uint64_t(face >> 2) + (face & 3u)]];
-  const bool exits =
-      (dot(normal, opposite - corners[0]) < 0.f) == (dot(normal, corners[0] - camera.eye) > 0.f);
+  const bool exits = (dot(normal, opposite - corners[0]) < 0.f) == (dot(normal, toEye) < 0.f);
   const float rightScale = 1.f / dot(camera.right, camera.right), upScale = 1.f / dot(camera.up, camera.up);
   float xLow = INFINITY, xHigh = -INFINITY, yLow = INFINITY, yHigh = -INFINITY;
   for (const Vec3f &p : corners) {
@@ -150,12 +131,38 @@ UVR_HOST_DEVICE void forEachPixelCrossing(const MeshView &mesh, uint32_t face, c
             x1 = int(fminf(floorf(xHigh + kMargin), float(camera.width - 1)));
   const int y0 = int(fmaxf(ceilf(yLow - kMargin), 0.f)),
             y1 = int(fminf(floorf(yHigh + kMargin), float(camera.height - 1)));
-  for (int y = y0; y <= y1; ++y)
+  // Moeller and Trumbore's test, along the unnormalised direction D = forward + u right + v up of the ray
+  // through the pixel at image coordinates (u, v): its determinant and both numerators are dot products
+  // with D, so linear in u and v, and t along D is the same numerator over the determinant for every pixel.
+  // A crossing is kept within a relative 1e-4 of the face's edges, and its t is scaled to the unit ray.
+  const Vec3f determinant = normal * -1.f, first = cross(e2, toEye), second = cross(toEye, e1);
+  const float along = dot(e2, second);
+  auto linear = [&](const Vec3f &n, float &base, float &perU, float &perV) {
+    base = dot(camera.forward, n), perU = dot(camera.right, n), perV = dot(camera.up, n);
+  };
+  float det0, detU, detV, first0, firstU, firstV, second0, secondU, secondV;
+  linear(determinant, det0, detU, detV);
+  linear(first, first0, firstU, firstV);
+  linear(second, second0, secondU, secondV);
+  constexpr float kEdgeTolerance = 1e-4f;
+  for (int y = y0; y <= y1; ++y) {
+    const float v = 1.f - 2.f * (float(y) + 0.5f) / float(camera.height);
     for (int x = x0; x <= x1; ++x) {
-      const float t = rayCrossesTriangle(camera.ray(x, y), corners[0], corners[1], corners[2]);
+      const float u = 2.f * (float(x) + 0.5f) / float(camera.width) - 1.f;
+      const float det = det0 + u * detU + v * detV;
+      if (det == 0.f)
+        continue;
+      const float inv = 1.f / det;
+      const float a = (first0 + u * firstU + v * firstV) * inv,
+                  b = (second0 + u * secondU + v * secondV) * inv;
+      if (!(a >= -kEdgeTolerance && b >= -kEdgeTolerance && a + b <= 1.f + kEdgeTolerance))
+        continue;
+      const Vec3f direction = camera.forward + camera.right * u + camera.up * v;
+      const float t = along * inv * sqrtf(dot(direction, direction));
       if (t > 0.f && t < INFINITY)
         visit(uint64_t(y) * uint64_t(camera.width) + uint64_t(x), crossingKey(t, face, exits));
     }
+  }
 }
 
 /// Every crossing of each pixel's ray of `camera`'s image with `faces`: pixel p's keys are keys[start[p]]
