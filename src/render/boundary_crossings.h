@@ -135,7 +135,7 @@ UVR_HOST_DEVICE void forEachPixelCrossing(const MeshView &mesh, uint32_t face, c
   // through the pixel at image coordinates (u, v): its determinant and both numerators are dot products
   // with D, so linear in u and v, and t along D is the same numerator over the determinant for every pixel.
   // A crossing is kept within a relative 1e-4 of the face's edges, and its t is scaled to the unit ray.
-  const Vec3f determinant = normal * -1.f, first = cross(e2, toEye), second = cross(toEye, e1);
+  const Vec3f determinant = cross(e2, e1), first = cross(e2, toEye), second = cross(toEye, e1);
   const float along = dot(e2, second);
   auto linear = [&](const Vec3f &n, float &base, float &perU, float &perV) {
     base = dot(camera.forward, n), perU = dot(camera.right, n), perV = dot(camera.up, n);

@@ -346,7 +346,8 @@ void CudaRenderer::findCrossings(const CameraView &camera, size_t pixels) {
   Impl &d = *impl_;
   const uint64_t faces = d.accel.boundaryFaceList.size();
   const unsigned blocks = blocksFor(faces, kRenderBlockThreads);
-  // As on the host: counted, placed from each pixel's start on, ordered pixel by pixel.
+  // What the host's findBoundaryCrossings makes, by testing the faces twice: once to count each pixel's
+  // crossings, once to place them from its start on; then ordered pixel by pixel.
   d.crossingStart.resize(pixels + 2);
   UVR_CUDA_CHECK(cudaMemsetAsync(d.crossingStart.data(), 0, d.crossingStart.bytes()));
   crossingsKernel<<<blocks, kRenderBlockThreads>>>(d.scene.mesh, d.accel.boundaryFaceList.data(), faces,
