@@ -122,15 +122,16 @@ UVR_HOST_DEVICE inline bool walkTets(const SceneView &scene, const Ray &ray, flo
 /// (the previous sample's cell), or, where the sample lies `far` from it (a step longer than a seed voxel) or
 /// there is none, from the seed of the sample's voxel. `walkSteps` bounds a walk from `at`: about 8 per fixed
 /// step, since samples lie a cell or two apart. With `skipEmpty`, points in empty space are rejected without
-/// the BVH: by the occupancy grid at once, or where the walk fails, by the boundary faces' parity; and a
-/// point the parity leaves inside (the walk left the mesh through a concavity, or ran out of steps) is walked
-/// to again from a cell near it (SeedGridView::startNear), so that the BVH, a long divergent query on a GPU,
-/// is left for what neither walk finds. Without `skipEmpty` a failed walk goes to the BVH, as in a plain ray
-/// marcher.
-UVR_HOST_DEVICE inline bool locateSample(const SceneView &scene, bool skipEmpty, const Ray &ray, float t,
-                                         int walkSteps, bool far, RayCell &at, float &value) {
+/// the BVH: with `clearVoxels` too by the occupancy grid at once, or where the walk fails, by the boundary
+/// faces' parity; and a point the parity leaves inside (the walk left the mesh through a concavity, or ran
+/// out of steps) is walked to again from a cell near it (SeedGridView::startNear), so that the BVH, a long
+/// divergent query on a GPU, is left for what neither walk finds. Without `skipEmpty` a failed walk goes to
+/// the BVH, as in a plain ray marcher.
+UVR_HOST_DEVICE inline bool locateSample(const SceneView &scene, bool skipEmpty, bool clearVoxels,
+                                         const Ray &ray, float t, int walkSteps, bool far, RayCell &at,
+                                         float &value) {
   const Vec3f p = ray.at(t);
-  if (skipEmpty && !scene.occupancy.mayHoldCell(p))
+  if (skipEmpty && clearVoxels && !scene.occupancy.mayHoldCell(p))
     return false;
   // A walk from `start`; a cell other than a tet is tested alone.
   auto locateFrom = [&](uint32_t start, int steps) {
@@ -205,6 +206,9 @@ UVR_HOST_DEVICE inline RayResult integrateRay(const SceneView &scene, const Inte
   // march goes on from the tet the ray re-enters by. nextCrossing follows the march along the crossings.
   const bool gaps = skip && crossings.count > 1;
   uint32_t nextCrossing = 0;
+  // Where the crossings are known, samples lie between them, in cells but for the margins: the occupancy
+  // grid would only confirm it.
+  const bool clearVoxels = crossings.keys == nullptr;
   // The index of the first grid point at or after t.
   auto gridIndex = [&](float t) {
     float k = ceilf((t - tEnter) / s1);
@@ -241,7 +245,7 @@ UVR_HOST_DEVICE inline RayResult integrateRay(const SceneView &scene, const Inte
       }
       ++result.samples;
       float value;
-      if (!locateSample(scene, skip, ray, t, walkSteps, far, at, value))
+      if (!locateSample(scene, skip, clearVoxels, ray, t, walkSteps, far, at, value))
         continue;
       if (first) {
         hint = at.cell;
