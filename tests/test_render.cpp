@@ -40,19 +40,26 @@ ColorMap rampMap() {
 
 float radial(Vec3f p) { return 1.f - 0.5f * length(p); }
 
-/// A jittered lattice of tets cut to a shell with a notch: a boundary with concave parts and a cavity.
-Mesh notchedShell() {
-  Mesh mesh = buildMesh(makeBoxGrid(CellType::Tetra, 14, kBox, radial, 0.25f), "shell");
+/// Keeps the tets of `mesh` whose centroid `keep` takes.
+template <typename Keep> void keepTets(Mesh &mesh, Keep &&keep) {
   UninitVector<uint32_t> kept;
   for (size_t c = 0; c < mesh.tets.size(); c += 4) {
     Vec3f centroid{0.f, 0.f, 0.f};
     for (int i = 0; i < 4; ++i)
       centroid = centroid + mesh.points[mesh.tets[c + size_t(i)]] * 0.25f;
-    const float r = length(centroid);
-    if (r > 0.45f && r < 0.95f && !(centroid.x > 0.2f && centroid.y > 0.2f))
+    if (keep(centroid))
       kept.insert(kept.end(), mesh.tets.begin() + long(c), mesh.tets.begin() + long(c) + 4);
   }
   mesh.tets = std::move(kept);
+}
+
+/// A jittered lattice of tets cut to a shell with a notch: a boundary with concave parts and a cavity.
+Mesh notchedShell() {
+  Mesh mesh = buildMesh(makeBoxGrid(CellType::Tetra, 14, kBox, radial, 0.25f), "shell");
+  keepTets(mesh, [](Vec3f centroid) {
+    const float r = length(centroid);
+    return r > 0.45f && r < 0.95f && !(centroid.x > 0.2f && centroid.y > 0.2f);
+  });
   return mesh;
 }
 
@@ -361,15 +368,8 @@ TEST_P(Integrator, BoundaryCrossingsLeaveTheImageAsItIs) {
 // which the ray leaves the mesh into and enters it again from, and still give `reference`'s image.
 TEST_P(Integrator, GapsBetweenBoundaryCrossingsTakeNoSample) {
   Mesh mesh = buildMesh(makeBoxGrid(CellType::Tetra, 10, kBox, radial), "slabs");
-  UninitVector<uint32_t> kept;
-  for (size_t c = 0; c < mesh.tets.size(); c += 4) {
-    float z = 0.f;
-    for (int i = 0; i < 4; ++i)
-      z += 0.25f * mesh.points[mesh.tets[c + size_t(i)]].z;
-    if (std::fabs(z) > 0.5f) // the gap is at least 0.6 wide: cells are 0.2 on a side
-      kept.insert(kept.end(), mesh.tets.begin() + long(c), mesh.tets.begin() + long(c) + 4);
-  }
-  mesh.tets = std::move(kept);
+  // The gap is at least 0.6 wide: cells are 0.2 on a side.
+  keepTets(mesh, [](Vec3f centroid) { return std::fabs(centroid.z) > 0.5f; });
   Renderer renderer(mesh, mesh.findField("f"), 32);
   renderer.setTransferFunction(TransferFunction(constantMap(0.05f), 0.f, 1.f));
   Camera along;
