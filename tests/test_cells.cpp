@@ -3,6 +3,7 @@
 #include "mesh/cell.h"
 #include "mesh/mesh_stats.h"
 #include "mesh/procedural_mesh.h"
+#include "mesh/tet_affine.h"
 
 #include <gtest/gtest.h>
 
@@ -59,6 +60,47 @@ TEST(TetWeights, ChangeAlongADirectionIsTheWeightsDifference) {
     for (int k = 0; k < 4; ++k) {
       EXPECT_EQ(w[k], plain[k]);
       EXPECT_NEAR(w[k] + s * dw[k], ahead[k], 1e-5f);
+    }
+  }
+}
+
+// A tet's affine record gives the weights and their change along a direction that its corners give, and the
+// value they interpolate, also far from the origin; a flat tet has none.
+TEST(TetAffine, AgreesWithTheCorners) {
+  std::mt19937 random(9);
+  std::uniform_real_distribution<float> u(-1.f, 1.f);
+  for (const Vec3f offset : {Vec3f{0.f, 0.f, 0.f}, Vec3f{3000.f, -2000.f, 500.f}}) {
+    const Vec3f corners[8] = {offset + Vec3f{0.1f, 0.2f, 0.3f}, offset + Vec3f{1.3f, 0.1f, 0.2f},
+                              offset + Vec3f{0.4f, 1.2f, 0.1f}, offset + Vec3f{0.5f, 0.4f, 1.1f},
+                              offset + Vec3f{0.6f, 0.6f, 0.6f}, offset + Vec3f{1.6f, 0.6f, 0.6f},
+                              offset + Vec3f{0.6f, 1.6f, 0.6f}, offset + Vec3f{1.1f, 1.1f, 0.6f}};
+    const uint32_t tets[8] = {0, 1, 2, 3, 4, 5, 6, 7}; // the second is flat
+    float values[8];
+    for (int k = 0; k < 8; ++k)
+      values[k] = linear(corners[k] - offset);
+    MeshView view;
+    view.points = corners;
+    view.tets = tets;
+    view.tetCount = 2;
+    view.values = values;
+    const std::vector<TetAffine> records = buildTetAffine(view);
+    ASSERT_EQ(records.size(), 2u);
+    const Vec3f *c = corners;
+    for (int i = 0; i < 200; ++i) {
+      const Vec3f p = offset + Vec3f{u(random), u(random), u(random)};
+      const Vec3f direction{u(random), u(random), u(random)};
+      float w[4], dw[4], expected[4], expectedChange[4];
+      ASSERT_TRUE(tetBarycentricsAlong(c[0], c[1], c[2], c[3], p, direction, expected, expectedChange));
+      ASSERT_TRUE(records[0].weightsAlong(p, direction, w, dw));
+      for (int k = 0; k < 4; ++k) {
+        EXPECT_NEAR(w[k], expected[k], 1e-5f);
+        EXPECT_NEAR(dw[k], expectedChange[k], 1e-5f);
+      }
+      float value, slope;
+      records[0].valueAlong(p, direction, value, slope);
+      EXPECT_NEAR(value, linear(p - offset), 1e-4f);
+      EXPECT_NEAR(slope, linear(direction) - linear({}), 1e-4f);
+      EXPECT_FALSE(records[1].weightsAlong(p, direction, w, dw));
     }
   }
 }

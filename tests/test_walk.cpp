@@ -2,24 +2,28 @@
 #include "mesh/cell.h"
 #include "mesh/mesh.h"
 #include "mesh/procedural_mesh.h"
+#include "mesh/tet_affine.h"
 #include "mesh/tet_neighbors.h"
 #include "render/integrator.h"
 
 #include <gtest/gtest.h>
 
 #include <random>
+#include <utility>
 #include <vector>
 
 using namespace uvr;
 
 // Samples a short step apart along random rays, each located from the previous one's cell with the weights
-// carried along the ray, land in a cell holding them and get the value that cell interpolates there.
+// carried along the ray, land in a cell holding them and get the value that cell interpolates there: with
+// the tets' corners read, as on the GPU, and with their affine records, as on the host.
 TEST(WalkTets, CarriedWeightsGiveTheCellsOwnValues) {
   const Box3f box{{-1.f, -1.f, -1.f}, {1.f, 1.f, 1.f}};
   const Mesh mesh = buildMesh(makeBoxGrid(
                                   CellType::Tetra, 5, box, [](Vec3f p) { return p.x * p.y + p.z; }, 0.3f, 11),
                               "box");
-  for (const int field : {0, -1}) {
+  for (const auto [field, records] : {std::pair{0, false}, {-1, false}, {0, true}, {-1, true}}) {
+    SCOPED_TRACE(testing::Message() << "field " << field << (records ? ", affine records" : ", corners"));
     const bool cellData = field < 0;
     const std::vector<uint32_t> neighbors = buildTetNeighbors(mesh);
     // Cell data: the cells' own index as their value, so that a value names its cell.
@@ -33,6 +37,8 @@ TEST(WalkTets, CarriedWeightsGiveTheCellsOwnValues) {
       scene.mesh.cellCentered = true;
     }
     scene.tetNeighbors = neighbors.data();
+    const std::vector<TetAffine> affine = records ? buildTetAffine(scene.mesh) : std::vector<TetAffine>{};
+    scene.tetAffine = records ? affine.data() : nullptr;
     std::mt19937 random(2);
     std::uniform_real_distribution<float> u(-0.9f, 0.9f);
     int carried = 0, walked = 0;

@@ -8,6 +8,7 @@
 #include "accel/seed_grid.h"
 #include "core/host_device.h"
 #include "mesh/cell.h"
+#include "mesh/tet_affine.h"
 #include "render/boundary_crossings.h"
 #include "render/transfer_function.h"
 
@@ -46,6 +47,7 @@ struct SceneView {
   OccupancyView occupancy;                ///< used by the skipping modes
   SeedGridView seeds;                     ///< where far walks start; boundary faces per voxel
   const uint32_t *tetNeighbors = nullptr; ///< 4 per tet; see buildTetNeighbors
+  const TetAffine *tetAffine = nullptr;   ///< per tet, or null: walks then read the corners
   PartitionsView partitions;
   const float *nodeMaxOpacity = nullptr; ///< per KD node, the maximum over the partitions below
   const float *sigma = nullptr;          ///< per partition, normalised colour deviation
@@ -86,15 +88,23 @@ UVR_HOST_DEVICE inline bool walkTets(const SceneView &scene, const Ray &ray, flo
   }
   const Vec3f p = ray.at(t);
   for (; step < maxSteps && current < mesh.tetCount; ++step) {
+#ifdef __CUDA_ARCH__
+    const TetAffine *affine = nullptr; // none on the GPU (see tet_affine.h): no code for them in its kernels
+#else
+    const TetAffine *affine = scene.tetAffine ? scene.tetAffine + current : nullptr;
+#endif
     const uint32_t *v = mesh.tets + 4 * uint64_t(current);
     float dw[4];
-    if (!tetBarycentricsAlong(mesh.points[v[0]], mesh.points[v[1]], mesh.points[v[2]], mesh.points[v[3]], p,
-                              ray.direction, w, dw))
+    if (affine ? !affine->weightsAlong(p, ray.direction, w, dw)
+               : !tetBarycentricsAlong(mesh.points[v[0]], mesh.points[v[1]], mesh.points[v[2]],
+                                       mesh.points[v[3]], p, ray.direction, w, dw))
       return false;
     const int exit = smallestWeight(w);
     if (w[exit] >= -kInsideTolerance) {
       float slope = 0.f;
-      if (mesh.cellCentered) {
+      if (affine) {
+        affine->valueAlong(p, ray.direction, value, slope);
+      } else if (mesh.cellCentered) {
         value = mesh.values[current];
       } else {
         const float v0 = mesh.values[v[0]], v1 = mesh.values[v[1]], v2 = mesh.values[v[2]],

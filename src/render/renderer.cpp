@@ -6,6 +6,8 @@
 #include "mesh/tet_neighbors.h"
 #include "render/pixel.h"
 
+#include <unistd.h>
+
 #include <algorithm>
 
 namespace uvr {
@@ -47,6 +49,17 @@ Backend parseBackend(const std::string &name) {
   throw Error("unknown backend '" + name + "': expected cpu or cuda");
 }
 
+namespace {
+
+/// Whether the walks' per-tet records fit: they take 64 bytes per tet, which an 8-byte-per-cell mesh on a
+/// small machine could not spare, so they are kept to an eighth of the memory.
+bool affineRecordsFit(uint64_t tets) {
+  const long pages = sysconf(_SC_PHYS_PAGES), pageBytes = sysconf(_SC_PAGE_SIZE);
+  return pages > 0 && pageBytes > 0 && tets * sizeof(TetAffine) <= uint64_t(pages) * uint64_t(pageBytes) / 8;
+}
+
+} // namespace
+
 Renderer::Renderer(const Mesh &mesh, int fieldIndex, uint32_t leafSize) : mesh_(mesh), leafSize_(leafSize) {
   if (fieldIndex < 0 || size_t(fieldIndex) >= mesh.fields.size())
     throw Error("the mesh has no scalar field to render");
@@ -67,6 +80,8 @@ const HostAcceleration &Renderer::host() const {
     if (!built->tetNeighbors.empty() && listsBoundaryFaces(meshView_))
       built->boundaryFaceList = listBoundaryFaces(built->tetNeighbors);
     built->partitions = buildPartitions(meshView_, leafSize());
+    if (!built->tetNeighbors.empty() && affineRecordsFit(meshView_.tetCount))
+      built->tetAffine = buildTetAffine(meshView_);
     hostBuildMs_ = timer.milliseconds();
     host_ = std::move(built);
   }
@@ -110,6 +125,7 @@ SceneView Renderer::sceneView() const {
   scene.occupancy = accel.occupancy.view();
   scene.seeds = accel.seeds.view();
   scene.tetNeighbors = accel.tetNeighbors.empty() ? nullptr : accel.tetNeighbors.data();
+  scene.tetAffine = accel.tetAffine.empty() ? nullptr : accel.tetAffine.data();
   scene.partitions = accel.partitions.view();
   const PartitionMetadata &meta = metadata();
   scene.nodeMaxOpacity = meta.nodeMaxOpacity.data();

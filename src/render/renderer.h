@@ -8,6 +8,7 @@
 #include "accel/seed_grid.h"
 #include "image/image.h"
 #include "mesh/mesh.h"
+#include "mesh/tet_affine.h"
 #include "render/camera.h"
 #include "render/integrator.h"
 #include "render/transfer_function.h"
@@ -58,6 +59,7 @@ struct HostAcceleration {
   std::vector<uint32_t> tetNeighbors;
   std::vector<uint32_t> boundaryFaceList; ///< for the per-frame crossings; empty where the grid lists none
   Partitions partitions;
+  std::vector<TetAffine> tetAffine; ///< host walks only; empty where they would take too much memory
 };
 
 struct Frame {
