@@ -1,5 +1,6 @@
 // The tet walk that locates samples along a ray, with the weights a ray carries from sample to sample.
 #include "mesh/cell.h"
+#include "mesh/cell_neighbors.h"
 #include "mesh/mesh.h"
 #include "mesh/procedural_mesh.h"
 #include "mesh/tet_affine.h"
@@ -8,6 +9,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <random>
 #include <utility>
 #include <vector>
@@ -66,5 +68,93 @@ TEST(WalkTets, CarriedWeightsGiveTheCellsOwnValues) {
     // Most samples lie in the previous sample's tet here; the rest cross into a neighbour.
     EXPECT_GT(carried, walked);
     EXPECT_GT(walked, 200);
+  }
+}
+
+// Across every face inside a lattice of each cell type there is the cell on the other side, and only there:
+// the relation is symmetric and the faces without one are the lattice's outer faces.
+TEST(CellNeighbors, LinkEachInnerFaceBothWays) {
+  constexpr int n = 4;
+  const Box3f box{{0.f, 0.f, 0.f}, {1.f, 1.f, 1.f}};
+  for (const CellType type : {CellType::Hexahedron, CellType::Wedge, CellType::Pyramid}) {
+    SCOPED_TRACE(int(type));
+    const Mesh mesh = buildMesh(makeBoxGrid(
+                                    type, n, box, [](Vec3f p) { return p.x; }, 0.3f, 4),
+                                "lattice");
+    const MeshView view = makeMeshView(mesh, 0);
+    const std::vector<uint32_t> neighbors = buildCellNeighbors(mesh);
+    ASSERT_EQ(neighbors.size(), kMaxCellFaces * view.cellCount());
+    uint64_t outer = 0;
+    for (uint64_t cell = 0; cell < view.cellCount(); ++cell) {
+      const int faces = cellFaces(cellType(view, cell)).count;
+      for (int f = 0; f < kMaxCellFaces; ++f) {
+        const uint32_t across = neighbors[kMaxCellFaces * cell + uint64_t(f)];
+        if (f >= faces || across == kNoCell) {
+          outer += f < faces;
+          continue;
+        }
+        ASSERT_NE(across, cell);
+        const uint32_t *back = neighbors.data() + kMaxCellFaces * uint64_t(across);
+        EXPECT_EQ(std::count(back, back + kMaxCellFaces, uint32_t(cell)), 1);
+      }
+    }
+    // The lattice's outer faces: a quad per cube side, but for wedges two triangles on the sides their
+    // cut runs across.
+    EXPECT_EQ(outer, uint64_t((type == CellType::Wedge ? 8 : 6) * n * n));
+  }
+}
+
+// Samples along random rays through jittered lattices of each cell type, each walked to from the previous
+// one's cell across faces, land in a cell holding them with the value that cell interpolates there. The
+// faces' planes only approximate the faces of such distorted cells, so a walk may circle and give up (the
+// caller then asks the seed grid or the BVH), but seldom.
+TEST(WalkCells, FindTheCellHoldingEachSample) {
+  const Box3f box{{-1.f, -1.f, -1.f}, {1.f, 1.f, 1.f}};
+  for (const CellType type : {CellType::Hexahedron, CellType::Wedge, CellType::Pyramid}) {
+    SCOPED_TRACE(int(type));
+    const Mesh mesh = buildMesh(makeBoxGrid(
+                                    type, 5, box, [](Vec3f p) { return p.x * p.y + p.z; }, 0.3f, 11),
+                                "lattice");
+    const std::vector<uint32_t> neighbors = buildCellNeighbors(mesh);
+    SceneView scene;
+    scene.mesh = makeMeshView(mesh, 0);
+    const std::vector<Vec4f> planes = buildCellFacePlanes(scene.mesh);
+    scene.cellNeighbors = neighbors.data();
+    scene.cellFacePlanes = planes.data();
+    std::mt19937 random(3);
+    std::uniform_real_distribution<float> u(-0.9f, 0.9f);
+    int steps = 0, walks = 0, failed = 0;
+    for (int r = 0; r < 100; ++r) {
+      const Vec3f origin{u(random), u(random), u(random)};
+      const Ray ray = makeRay(origin, normalize(Vec3f{u(random), u(random), u(random)}));
+      float tEnter, tExit;
+      ASSERT_TRUE(intersectBox(ray, box, 0.f, INFINITY, tEnter, tExit));
+      RayCell at;
+      for (uint32_t c = 0; c < scene.mesh.cellCount() && at.cell == kNoCell; ++c)
+        if (cellContains(scene.mesh, c, origin))
+          at.cell = c;
+      ASSERT_NE(at.cell, kNoCell);
+      for (float t = 0.f; t < tExit - 1e-3f; t += 0.1f) {
+        const uint32_t from = at.cell;
+        const Vec3f p = ray.at(t);
+        float value;
+        ++walks;
+        if (!walkCells(scene, ray, t, at.cell, 64, at, value)) {
+          ++failed;
+          at.cell = kNoCell;
+          for (uint32_t c = 0; c < scene.mesh.cellCount() && at.cell == kNoCell; ++c)
+            if (cellContains(scene.mesh, c, p))
+              at.cell = c;
+          continue;
+        }
+        ASSERT_TRUE(cellContains(scene.mesh, at.cell, p));
+        float expected;
+        ASSERT_TRUE(sampleCell(scene.mesh, at.cell, p, expected));
+        EXPECT_NEAR(value, expected, 1e-5f);
+        steps += at.cell != from;
+      }
+    }
+    EXPECT_GT(steps, 200); // the walks did cross cells
+    EXPECT_LT(failed, walks / 100) << failed << " of " << walks;
   }
 }

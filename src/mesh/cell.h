@@ -272,22 +272,24 @@ UVR_HOST_DEVICE inline bool cellContains(const MeshView &mesh, uint64_t cell, Ve
   return isoparametricWeights<8>(mesh.points, mesh.hexes + 8 * local, p, s);
 }
 
+/// The corner points of `cell`, `count` of them.
+UVR_HOST_DEVICE inline const uint32_t *cellCorners(const MeshView &mesh, uint64_t cell, int &count) {
+  uint64_t local = cell;
+  if (local < mesh.tetCount)
+    return count = 4, mesh.tets + 4 * local;
+  if ((local -= mesh.tetCount) < mesh.pyramidCount)
+    return count = 5, mesh.pyramids + 5 * local;
+  if ((local -= mesh.pyramidCount) < mesh.wedgeCount)
+    return count = 6, mesh.wedges + 6 * local;
+  local -= mesh.wedgeCount;
+  return count = 8, mesh.hexes + 8 * local;
+}
+
 /// Calls `visit(point)` for each corner point of `cell`.
 template <typename Visit>
 UVR_HOST_DEVICE void forEachCellVertex(const MeshView &mesh, uint64_t cell, Visit &&visit) {
-  const uint32_t *v;
   int n;
-  uint64_t local = cell;
-  if (local < mesh.tetCount) {
-    v = mesh.tets + 4 * local, n = 4;
-  } else if ((local -= mesh.tetCount) < mesh.pyramidCount) {
-    v = mesh.pyramids + 5 * local, n = 5;
-  } else if ((local -= mesh.pyramidCount) < mesh.wedgeCount) {
-    v = mesh.wedges + 6 * local, n = 6;
-  } else {
-    local -= mesh.wedgeCount;
-    v = mesh.hexes + 8 * local, n = 8;
-  }
+  const uint32_t *v = cellCorners(mesh, cell, n);
   for (int i = 0; i < n; ++i)
     visit(v[i]);
 }

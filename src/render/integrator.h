@@ -8,6 +8,7 @@
 #include "accel/seed_grid.h"
 #include "core/host_device.h"
 #include "mesh/cell.h"
+#include "mesh/cell_neighbors.h"
 #include "mesh/tet_affine.h"
 #include "render/boundary_crossings.h"
 #include "render/transfer_function.h"
@@ -44,10 +45,12 @@ struct IntegratorSettings {
 struct SceneView {
   MeshView mesh;
   BvhView bvh;
-  OccupancyView occupancy;                ///< used by the skipping modes
-  SeedGridView seeds;                     ///< where far walks start; boundary faces per voxel
-  const uint32_t *tetNeighbors = nullptr; ///< 4 per tet; see buildTetNeighbors
-  const TetAffine *tetAffine = nullptr;   ///< per tet, or null: walks then read the corners
+  OccupancyView occupancy;                 ///< used by the skipping modes
+  SeedGridView seeds;                      ///< where far walks start; boundary faces per voxel
+  const uint32_t *tetNeighbors = nullptr;  ///< 4 per tet; see buildTetNeighbors
+  const TetAffine *tetAffine = nullptr;    ///< per tet, or null: walks then read the corners
+  const uint32_t *cellNeighbors = nullptr; ///< the other cells' faces' neighbours; see buildCellNeighbors
+  const Vec4f *cellFacePlanes = nullptr;   ///< and their planes; see buildCellFacePlanes
   PartitionsView partitions;
   const float *nodeMaxOpacity = nullptr; ///< per KD node, the maximum over the partitions below
   const float *sigma = nullptr;          ///< per partition, normalised colour deviation
@@ -136,6 +139,31 @@ UVR_HOST_DEVICE inline bool walkTets(const SceneView &scene, const Ray &ray, flo
   return false;
 }
 
+/// Steps through cells other than tets towards the sample at `t` on `ray`, from `start` across the face whose
+/// plane the sample lies furthest beyond, testing a cell (a Newton solve) only where the sample lies within
+/// about all its faces' planes; a tet on the way hands over to walkTets. Gives up after `maxSteps` cells.
+UVR_HOST_DEVICE inline bool walkCells(const SceneView &scene, const Ray &ray, float t, uint32_t start,
+                                      int maxSteps, RayCell &at, float &value) {
+  const MeshView &mesh = scene.mesh;
+  const Vec3f p = ray.at(t);
+  uint32_t current = start;
+  for (int step = 0; step < maxSteps && current != kNoCell; ++step) {
+    if (current < mesh.tetCount)
+      return scene.tetNeighbors && walkTets(scene, ray, t, current, maxSteps - step, at, value);
+    const uint64_t other = uint64_t(current) - mesh.tetCount;
+    float beyond;
+    const int face = furthestFace(scene.cellFacePlanes, other, p, beyond);
+    // Faces of distorted cells are not planar: near their planes, the cell's own test decides.
+    if (beyond <= 0.25f && sampleCell(mesh, current, p, value)) {
+      at.cell = current;
+      at.affine = false;
+      return true;
+    }
+    current = scene.cellNeighbors[kMaxCellFaces * other + uint64_t(face)];
+  }
+  return false;
+}
+
 /// Finds the cell holding the sample at `t` on `ray` and returns the field there. The walk starts from `at`
 /// (the previous sample's cell), or, where the sample lies `far` from it (a step longer than a seed voxel) or
 /// there is none, from the seed of the sample's voxel. `walkSteps` bounds a walk from `at`: about 8 per fixed
@@ -155,6 +183,10 @@ UVR_HOST_DEVICE inline bool locateSample(const SceneView &scene, bool skipEmpty,
   auto locateFrom = [&](uint32_t start, int steps) {
     if (scene.tetNeighbors && start < scene.mesh.tetCount)
       return walkTets(scene, ray, t, start, steps, at, value);
+#ifndef __CUDA_ARCH__ // the GPU does not build the other cells' adjacency: no code for it in its kernels
+    if (scene.cellNeighbors && scene.cellFacePlanes && start >= scene.mesh.tetCount)
+      return walkCells(scene, ray, t, start, steps, at, value);
+#endif
     if (!sampleCell(scene.mesh, start, p, value))
       return false;
     at.cell = start;

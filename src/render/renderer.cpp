@@ -3,6 +3,7 @@
 #include "backend/cuda/cuda_renderer.h"
 #include "core/error.h"
 #include "core/timer.h"
+#include "mesh/cell_neighbors.h"
 #include "mesh/tet_neighbors.h"
 #include "render/pixel.h"
 
@@ -75,6 +76,8 @@ const HostAcceleration &Renderer::host() const {
     built->bvh = buildBvh(meshView_);
     built->occupancy = buildOccupancyGrid(meshView_);
     built->tetNeighbors = buildTetNeighbors(mesh_);
+    built->cellNeighbors = buildCellNeighbors(mesh_);
+    built->cellFacePlanes = buildCellFacePlanes(meshView_);
     built->seeds =
         buildSeedGrid(meshView_, built->tetNeighbors.empty() ? nullptr : built->tetNeighbors.data());
     if (!built->tetNeighbors.empty() && listsBoundaryFaces(meshView_))
@@ -125,6 +128,8 @@ SceneView Renderer::sceneView() const {
   scene.occupancy = accel.occupancy.view();
   scene.seeds = accel.seeds.view();
   scene.tetNeighbors = accel.tetNeighbors.empty() ? nullptr : accel.tetNeighbors.data();
+  scene.cellNeighbors = accel.cellNeighbors.empty() ? nullptr : accel.cellNeighbors.data();
+  scene.cellFacePlanes = accel.cellFacePlanes.empty() ? nullptr : accel.cellFacePlanes.data();
   scene.tetAffine = accel.tetAffine.empty() ? nullptr : accel.tetAffine.data();
   scene.partitions = accel.partitions.view();
   const PartitionMetadata &meta = metadata();
