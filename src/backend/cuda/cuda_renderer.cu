@@ -59,20 +59,15 @@ dim3 renderBlock(RenderMode mode) {
 /// at 128.
 constexpr int kMarchingBlocksPerSm = 5, kSkippingBlocksPerSm = 4;
 
-/// Bands of rows a frame is drawn and copied back in (render's comment says why).
-constexpr int kFrameBands = 4;
-/// Bytes of a piece of the frame that one core copies from pinned memory into the caller's arrays.
-constexpr size_t kHostCopyGrain = size_t(1) << 18;
-
 template <int BlocksPerSm>
 __global__ void __launch_bounds__(kRenderBlockThreads, BlocksPerSm)
     renderKernel(SceneView scene, IntegratorSettings settings, CameraView camera, PixelTarget target,
-                 int firstRow, int endRow, const uint64_t *crossingStart, const uint64_t *crossingKeys,
+                 int height, const uint64_t *crossingStart, const uint64_t *crossingKeys,
                  SampleTotals *samples) {
   const int x = int(blockIdx.x * blockDim.x + threadIdx.x);
-  const int y = firstRow + int(blockIdx.y * blockDim.y + threadIdx.y);
-  uint32_t taken = 0; // pixels past the band's edge take none, and still join the warp's sums below
-  if (x < target.width && y < endRow) {
+  const int y = int(blockIdx.y * blockDim.y + threadIdx.y);
+  uint32_t taken = 0; // pixels past the frame's edge take none, and still join the warp's sums below
+  if (x < target.width && y < height) {
     uint32_t hint = kNoCell; // no neighbouring ray to start from: the seed grid finds the first cell
     BoundaryCrossings crossings;
     if (crossingStart)
@@ -239,29 +234,16 @@ struct CudaRenderer::Impl {
   DeviceBuffer<uint64_t> crossingStart, crossingKeys, placedCrossings; // see findBoundaryCrossings
   CubScratch scratch;
   PinnedBuffer staging;                                   // the frame's arrays on their way to the caller's
-  cudaEvent_t kernelStart = nullptr, kernelEnd = nullptr; // around the crossings and the render kernels
-  cudaEvent_t bandsMayStart = nullptr;                    // the crossings found, the totals cleared
-  cudaStream_t bandStreams[2] = {}, copyStream = nullptr;
-  std::vector<cudaEvent_t> bandDone, pieceCopied; // per band of the frame; per piece on its way back
-
-  /// An event without timing per entry of `events` up to `count`.
-  static void reserveEvents(std::vector<cudaEvent_t> &events, size_t count) {
-    while (events.size() < count) {
-      events.emplace_back();
-      UVR_CUDA_CHECK(cudaEventCreateWithFlags(&events.back(), cudaEventDisableTiming));
-    }
-  }
+  cudaEvent_t kernelStart = nullptr, kernelEnd = nullptr; // around the render kernel
+  std::vector<cudaEvent_t> pieceCopied;                   // per piece of the frame on its way back
 
   ~Impl() {
-    for (cudaEvent_t event : {kernelStart, kernelEnd, bandsMayStart})
-      if (event)
-        cudaEventDestroy(event);
-    for (cudaStream_t stream : {bandStreams[0], bandStreams[1], copyStream})
-      if (stream)
-        cudaStreamDestroy(stream);
-    for (const auto *events : {&bandDone, &pieceCopied})
-      for (cudaEvent_t event : *events)
-        cudaEventDestroy(event);
+    if (kernelStart)
+      cudaEventDestroy(kernelStart);
+    if (kernelEnd)
+      cudaEventDestroy(kernelEnd);
+    for (cudaEvent_t event : pieceCopied)
+      cudaEventDestroy(event);
   }
 };
 
@@ -279,9 +261,6 @@ CudaRenderer::CudaRenderer(const MeshView &mesh, uint64_t pointCount, uint32_t l
   Impl &d = *impl_;
   UVR_CUDA_CHECK(cudaEventCreate(&d.kernelStart));
   UVR_CUDA_CHECK(cudaEventCreate(&d.kernelEnd));
-  UVR_CUDA_CHECK(cudaEventCreateWithFlags(&d.bandsMayStart, cudaEventDisableTiming));
-  for (cudaStream_t *stream : {&d.bandStreams[0], &d.bandStreams[1], &d.copyStream})
-    UVR_CUDA_CHECK(cudaStreamCreateWithFlags(stream, cudaStreamNonBlocking));
   SceneView &scene = d.scene;
   scene.mesh = mesh;
   scene.mesh.points = d.points.upload(mesh.points, pointCount);
@@ -402,92 +381,70 @@ double CudaRenderer::render(const CameraView &camera, const IntegratorSettings &
   d.opacity.resize(target.opacity ? pixels : 0);
   d.samples.resize(target.samples ? pixels : 0);
   d.sampleTotals.resize(1);
-  UVR_CUDA_CHECK(cudaEventRecord(d.kernelStart));
   UVR_CUDA_CHECK(cudaMemsetAsync(d.sampleTotals.data(), 0, d.sampleTotals.bytes()));
   PixelTarget device = target;
   device.rgb = d.rgb.data();
   device.opacity = target.opacity ? d.opacity.data() : nullptr;
   device.samples = target.samples ? d.samples.data() : nullptr;
+  const dim3 block = renderBlock(settings.mode);
+  const dim3 grid((unsigned(target.width) + block.x - 1) / block.x,
+                  (unsigned(height) + block.y - 1) / block.y);
+  UVR_CUDA_CHECK(cudaEventRecord(d.kernelStart));
   const uint64_t faces = d.accel.boundaryFaceList.size();
   const bool crossings =
       skipsSpace(settings.mode) && faces > 0 && crossingsApply(camera, d.scene.partitions.rootBounds);
   if (crossings)
     findCrossings(camera, pixels);
   const uint64_t *crossingStart = crossings ? d.crossingStart.data() : nullptr;
-  UVR_CUDA_CHECK(cudaEventRecord(d.bandsMayStart));
-
-  // The frame is drawn in bands of rows, on two streams so that one band's last blocks run beside the next
-  // band's first, and each band is copied back while the next ones are drawn: only the last band's copy
-  // adds to the frame's time. Copies into pageable memory run at a fraction of the bus's speed, so they go
-  // through pinned memory, from which the host copies each piece into the caller's arrays on all cores.
-  const dim3 block = renderBlock(settings.mode);
-  const int bandRows =
-      int(block.y) * std::max(1, (height + kFrameBands * int(block.y) - 1) / (kFrameBands * int(block.y)));
-  const int bands = (height + bandRows - 1) / bandRows;
   const auto kernel =
       skipsSpace(settings.mode) ? renderKernel<kSkippingBlocksPerSm> : renderKernel<kMarchingBlocksPerSm>;
-  Impl::reserveEvents(d.bandDone, size_t(bands));
-  for (int band = 0; band < bands; ++band) {
-    const int firstRow = band * bandRows, endRow = std::min(height, firstRow + bandRows);
-    const cudaStream_t stream = d.bandStreams[band % 2];
-    UVR_CUDA_CHECK(cudaStreamWaitEvent(stream, d.bandsMayStart));
-    const dim3 grid((unsigned(target.width) + block.x - 1) / block.x,
-                    (unsigned(endRow - firstRow) + block.y - 1) / block.y);
-    kernel<<<grid, block, 0, stream>>>(d.scene, settings, camera, device, firstRow, endRow, crossingStart,
-                                       d.crossingKeys.data(), d.sampleTotals.data());
-    UVR_CUDA_CHECK(cudaGetLastError());
-    UVR_CUDA_CHECK(cudaEventRecord(d.bandDone[size_t(band)], stream));
-    UVR_CUDA_CHECK(cudaStreamWaitEvent(nullptr, d.bandDone[size_t(band)]));
-  }
+  kernel<<<grid, block>>>(d.scene, settings, camera, device, height, crossingStart, d.crossingKeys.data(),
+                          d.sampleTotals.data());
+  UVR_CUDA_CHECK(cudaGetLastError());
   UVR_CUDA_CHECK(cudaEventRecord(d.kernelEnd));
-
-  // Per-pixel arrays the caller did not ask for stay on the GPU.
+  // The frame comes back through pinned memory, piece by piece, each copied on all cores into the caller's
+  // arrays while the next crosses the bus: copies into pageable memory run at a fraction of the bus's speed.
+  // Buffers the caller did not ask for stay on the GPU.
   struct Part {
-    uint8_t *destination;
-    const uint8_t *source;
-    size_t bytesPerPixel; // 0 for an array not kept
+    void *destination;
+    const void *source;
+    size_t bytes; // 0 for a buffer not kept
   };
-  const Part parts[] = {
-      {target.rgb, d.rgb.data(), 3},
-      {reinterpret_cast<uint8_t *>(target.opacity), reinterpret_cast<const uint8_t *>(d.opacity.data()),
-       target.opacity ? sizeof(float) : 0},
-      {reinterpret_cast<uint8_t *>(target.samples), reinterpret_cast<const uint8_t *>(d.samples.data()),
-       target.samples ? sizeof(uint32_t) : 0}};
-  size_t stagedBytes = sizeof(SampleTotals);
+  const Part parts[] = {{&samples, d.sampleTotals.data(), d.sampleTotals.bytes()},
+                        {target.rgb, d.rgb.data(), d.rgb.bytes()},
+                        {target.opacity, d.opacity.data(), d.opacity.bytes()},
+                        {target.samples, d.samples.data(), d.samples.bytes()}};
+  size_t stagedBytes = 0;
   for (const Part &part : parts)
-    stagedBytes += part.bytesPerPixel * pixels;
+    stagedBytes += part.bytes;
   d.staging.resize(stagedBytes);
   uint8_t *staged = d.staging.data();
   struct Piece {
     uint8_t *destination;
     size_t offset, bytes; // in the staging buffer
   };
+  constexpr size_t kPiece = size_t(1) << 20;
   std::vector<Piece> pieces;
-  Impl::reserveEvents(d.pieceCopied, size_t(bands) * std::size(parts) + 1);
-  auto copyBack = [&](uint8_t *destination, const void *source, size_t offset, size_t bytes) {
-    UVR_CUDA_CHECK(cudaMemcpyAsync(staged + offset, source, bytes, cudaMemcpyDeviceToHost, d.copyStream));
-    UVR_CUDA_CHECK(cudaEventRecord(d.pieceCopied[pieces.size()], d.copyStream));
-    pieces.push_back({destination, offset, bytes});
-  };
-  for (int band = 0; band < bands; ++band) {
-    UVR_CUDA_CHECK(cudaStreamWaitEvent(d.copyStream, d.bandDone[size_t(band)]));
-    const size_t first = size_t(band) * size_t(bandRows) * size_t(target.width);
-    const size_t count = std::min(pixels, first + size_t(bandRows) * size_t(target.width)) - first;
-    size_t offset = sizeof(SampleTotals);
-    for (const Part &part : parts) {
-      if (part.bytesPerPixel)
-        copyBack(part.destination + first * part.bytesPerPixel, part.source + first * part.bytesPerPixel,
-                 offset + first * part.bytesPerPixel, count * part.bytesPerPixel);
-      offset += part.bytesPerPixel * pixels;
+  size_t offset = 0;
+  for (const Part &part : parts) {
+    for (size_t at = 0; at < part.bytes; at += kPiece) {
+      const size_t bytes = std::min(kPiece, part.bytes - at);
+      UVR_CUDA_CHECK(cudaMemcpyAsync(staged + offset + at, static_cast<const uint8_t *>(part.source) + at,
+                                     bytes, cudaMemcpyDeviceToHost));
+      if (d.pieceCopied.size() == pieces.size()) {
+        d.pieceCopied.emplace_back();
+        UVR_CUDA_CHECK(cudaEventCreateWithFlags(&d.pieceCopied.back(), cudaEventDisableTiming));
+      }
+      UVR_CUDA_CHECK(cudaEventRecord(d.pieceCopied[pieces.size()]));
+      pieces.push_back({static_cast<uint8_t *>(part.destination) + at, offset + at, bytes});
     }
+    offset += part.bytes;
   }
-  UVR_CUDA_CHECK(cudaStreamWaitEvent(d.copyStream, d.kernelEnd));
-  copyBack(reinterpret_cast<uint8_t *>(&samples), d.sampleTotals.data(), 0, sizeof(SampleTotals));
   for (size_t i = 0; i < pieces.size(); ++i) {
     UVR_CUDA_CHECK(cudaEventSynchronize(d.pieceCopied[i])); // a kernel fault surfaces at the first
     const Piece &piece = pieces[i];
     tbb::parallel_for(
-        tbb::blocked_range<size_t>(0, piece.bytes, kHostCopyGrain), [&](const tbb::blocked_range<size_t> &r) {
+        tbb::blocked_range<size_t>(0, piece.bytes, kPiece / 4), [&](const tbb::blocked_range<size_t> &r) {
           std::memcpy(piece.destination + r.begin(), staged + piece.offset + r.begin(), r.size());
         });
   }
