@@ -16,6 +16,18 @@
 
 using namespace uvr;
 
+namespace {
+
+/// The first cell holding `p`, found by testing every cell; kNoCell where none does.
+uint32_t cellHolding(const MeshView &mesh, Vec3f p) {
+  for (uint32_t c = 0; c < mesh.cellCount(); ++c)
+    if (cellContains(mesh, c, p))
+      return c;
+  return kNoCell;
+}
+
+} // namespace
+
 // Samples a short step apart along random rays, each located from the previous one's cell with the weights
 // carried along the ray, land in a cell holding them and get the value that cell interpolates there: with
 // the tets' corners read, as on the GPU, and with their affine records, as on the host.
@@ -50,9 +62,7 @@ TEST(WalkTets, CarriedWeightsGiveTheCellsOwnValues) {
       float tEnter, tExit;
       ASSERT_TRUE(intersectBox(ray, box, 0.f, INFINITY, tEnter, tExit));
       RayCell at;
-      for (uint32_t c = 0; c < scene.mesh.tetCount && at.cell == kNoCell; ++c)
-        if (cellContains(scene.mesh, c, origin))
-          at.cell = c;
+      at.cell = cellHolding(scene.mesh, origin);
       ASSERT_NE(at.cell, kNoCell);
       for (float t = 0.f; t < tExit; t += 0.05f) {
         float value;
@@ -130,9 +140,7 @@ TEST(WalkCells, FindTheCellHoldingEachSample) {
       float tEnter, tExit;
       ASSERT_TRUE(intersectBox(ray, box, 0.f, INFINITY, tEnter, tExit));
       RayCell at;
-      for (uint32_t c = 0; c < scene.mesh.cellCount() && at.cell == kNoCell; ++c)
-        if (cellContains(scene.mesh, c, origin))
-          at.cell = c;
+      at.cell = cellHolding(scene.mesh, origin);
       ASSERT_NE(at.cell, kNoCell);
       for (float t = 0.f; t < tExit - 1e-3f; t += 0.1f) {
         const uint32_t from = at.cell;
@@ -141,10 +149,7 @@ TEST(WalkCells, FindTheCellHoldingEachSample) {
         ++walks;
         if (!walkCells(scene, ray, t, at.cell, 64, at, value)) {
           ++failed;
-          at.cell = kNoCell;
-          for (uint32_t c = 0; c < scene.mesh.cellCount() && at.cell == kNoCell; ++c)
-            if (cellContains(scene.mesh, c, p))
-              at.cell = c;
+          at.cell = cellHolding(scene.mesh, p);
           continue;
         }
         ASSERT_TRUE(cellContains(scene.mesh, at.cell, p));
