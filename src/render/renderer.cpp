@@ -52,11 +52,12 @@ Backend parseBackend(const std::string &name) {
 
 namespace {
 
-/// Whether the walks' per-tet records fit: they take 64 bytes per tet, which an 8-byte-per-cell mesh on a
-/// small machine could not spare, so they are kept to an eighth of the memory.
-bool affineRecordsFit(uint64_t tets) {
+/// Whether a structure that only speeds walks up may take `bytes`: the per-tet records (64 bytes a tet) and
+/// the other cells' adjacency (120 bytes a cell, 144 more while it is built) would cost more than a large
+/// mesh on a small machine could spare, so each is kept to an eighth of the memory.
+bool walkAidFits(uint64_t bytes) {
   const long pages = sysconf(_SC_PHYS_PAGES), pageBytes = sysconf(_SC_PAGE_SIZE);
-  return pages > 0 && pageBytes > 0 && tets * sizeof(TetAffine) <= uint64_t(pages) * uint64_t(pageBytes) / 8;
+  return pages > 0 && pageBytes > 0 && bytes <= uint64_t(pages) * uint64_t(pageBytes) / 8;
 }
 
 } // namespace
@@ -76,14 +77,17 @@ const HostAcceleration &Renderer::host() const {
     built->bvh = buildBvh(meshView_);
     built->occupancy = buildOccupancyGrid(meshView_);
     built->tetNeighbors = buildTetNeighbors(mesh_);
-    built->cellNeighbors = buildCellNeighbors(mesh_);
-    built->cellFacePlanes = buildCellFacePlanes(meshView_);
+    const uint64_t otherCells = meshView_.cellCount() - meshView_.tetCount;
+    if (walkAidFits(otherCells * (kMaxCellFaces * (sizeof(uint32_t) + sizeof(Vec4f)) + 144))) {
+      built->cellNeighbors = buildCellNeighbors(mesh_);
+      built->cellFacePlanes = buildCellFacePlanes(meshView_);
+    }
     built->seeds =
         buildSeedGrid(meshView_, built->tetNeighbors.empty() ? nullptr : built->tetNeighbors.data());
     if (!built->tetNeighbors.empty() && listsBoundaryFaces(meshView_))
       built->boundaryFaceList = listBoundaryFaces(built->tetNeighbors);
     built->partitions = buildPartitions(meshView_, leafSize());
-    if (!built->tetNeighbors.empty() && affineRecordsFit(meshView_.tetCount))
+    if (!built->tetNeighbors.empty() && walkAidFits(meshView_.tetCount * sizeof(TetAffine)))
       built->tetAffine = buildTetAffine(meshView_);
     hostBuildMs_ = timer.milliseconds();
     host_ = std::move(built);

@@ -57,8 +57,8 @@ struct HostAcceleration {
   OccupancyGrid occupancy;
   SeedGrid seeds;
   std::vector<uint32_t> tetNeighbors;
-  std::vector<uint32_t> cellNeighbors;    ///< empty for tets alone
-  std::vector<Vec4f> cellFacePlanes;      ///< empty for tets alone
+  std::vector<uint32_t> cellNeighbors;    ///< empty for tets alone, or where memory is short
+  std::vector<Vec4f> cellFacePlanes;      ///< likewise
   std::vector<uint32_t> boundaryFaceList; ///< for the per-frame crossings; empty where the grid lists none
   Partitions partitions;
   std::vector<TetAffine> tetAffine; ///< host walks only; empty where they would take too much memory
