@@ -80,8 +80,10 @@ UVR_HOST_DEVICE inline int widestAxis(Vec3f extent) {
 /// inside, whatever the rounding of the slab test.
 inline float partitionPadding(const Box3f &meshBounds) { return 1e-5f * length(meshBounds.size()) + 1e-30f; }
 
-/// Deeper nodes are leaves whatever their cell count (identical centroids cannot be split anyway).
-constexpr int kMaxPartitionDepth = 48;
+/// Deeper nodes are leaves whatever their cell count (identical centroids cannot be split anyway). Median
+/// splits halve the cells at each level, so 32 levels hold the 2^32 cells that 32-bit indices can name; a
+/// traversal's stack, one entry per level at most, stays as small (on a GPU it lives in local memory).
+constexpr int kMaxPartitionDepth = 32;
 
 /// The scalar range a cell contributes to its partitions: empty where it holds only NaN, [0, 0] for geometry
 /// alone (no field).
@@ -142,7 +144,7 @@ UVR_HOST_DEVICE void forEachLeafTouching(const KdNode *nodes, const Box3f &box, 
 template <typename Visit>
 UVR_HOST_DEVICE void traversePartitions(const PartitionsView &parts, const Ray &ray, float tMin, float tMax,
                                         const float *nodeMaxOpacity, Visit &&visit) {
-  constexpr int kStackSize = 64;
+  constexpr int kStackSize = kMaxPartitionDepth;
   struct Entry {
     uint32_t node;
     float t0, t1;

@@ -47,17 +47,24 @@ UVR_HOST_DEVICE inline bool tetBarycentrics(Vec3f a, Vec3f b, Vec3f c, Vec3f d, 
   return tetBarycentricsAlong(a, b, c, d, p, Vec3f{}, w, unused);
 }
 
-/// Index of the smallest weight: the face (opposite that vertex) the point lies furthest beyond.
-/// Ties go to the lower index. Selects, not branches: which face a walk leaves by is unpredictable.
-UVR_HOST_DEVICE inline int smallestWeight(const float w[4]) {
+/// Index of the smallest weight: the face (opposite that vertex) the point lies furthest beyond; and the
+/// weight itself in `lowest`. Ties go to the lower index. Selects, not branches: which face a walk leaves by
+/// is unpredictable; and no array indexed at run time, which a GPU would keep in local memory.
+UVR_HOST_DEVICE inline int smallestWeight(const float w[4], float &lowest) {
   const bool low1 = w[1] < w[0], low3 = w[3] < w[2];
   const float lowest01 = low1 ? w[1] : w[0], lowest23 = low3 ? w[3] : w[2];
-  return lowest23 < lowest01 ? 2 + int(low3) : int(low1);
+  const bool low23 = lowest23 < lowest01;
+  lowest = low23 ? lowest23 : lowest01;
+  return low23 ? 2 + int(low3) : int(low1);
 }
 
 /// Barycentric weights of `p` in tetrahedron (a, b, c, d); false when `p` is outside or the cell is flat.
 UVR_HOST_DEVICE inline bool tetWeights(Vec3f a, Vec3f b, Vec3f c, Vec3f d, Vec3f p, float w[4]) {
-  return tetBarycentrics(a, b, c, d, p, w) && w[smallestWeight(w)] >= -kInsideTolerance;
+  if (!tetBarycentrics(a, b, c, d, p, w))
+    return false;
+  float lowest;
+  smallestWeight(w, lowest);
+  return lowest >= -kInsideTolerance;
 }
 
 /// VTK's shape functions and their parametric derivatives for the non-simplex cells.

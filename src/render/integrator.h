@@ -81,8 +81,9 @@ UVR_HOST_DEVICE inline bool walkTets(const SceneView &scene, const Ray &ray, flo
     const float s = t - at.t;
     for (int i = 0; i < 4; ++i)
       w[i] = at.w[i] + s * at.dw[i];
-    const int exit = smallestWeight(w);
-    if (w[exit] >= -kInsideTolerance) {
+    float lowest;
+    const int exit = smallestWeight(w, lowest);
+    if (lowest >= -kInsideTolerance) {
       value = at.value + s * at.dvalue;
       return true;
     }
@@ -110,8 +111,9 @@ UVR_HOST_DEVICE inline bool walkTets(const SceneView &scene, const Ray &ray, flo
                : !tetBarycentricsAlong(mesh.points[v[0]], mesh.points[v[1]], mesh.points[v[2]],
                                        mesh.points[v[3]], p, ray.direction, w, dw))
       return false;
-    const int exit = smallestWeight(w);
-    if (w[exit] >= -kInsideTolerance) {
+    float lowest;
+    const int exit = smallestWeight(w, lowest);
+    if (lowest >= -kInsideTolerance) {
       float slope = 0.f;
       if (affine) {
         affine->valueAlong(p, ray.direction, value, slope);
