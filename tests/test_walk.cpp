@@ -26,16 +26,34 @@ uint32_t cellHolding(const MeshView &mesh, Vec3f p) {
   return kNoCell;
 }
 
+const Box3f kCube{{-1.f, -1.f, -1.f}, {1.f, 1.f, 1.f}};
+
+/// A ray from a random point well inside kCube in a random direction, and where it leaves the cube.
+struct RayInCube {
+  Vec3f origin;
+  Ray ray;
+  float tExit = 0.f;
+};
+RayInCube randomRayInCube(std::mt19937 &random) {
+  std::uniform_real_distribution<float> u(-0.9f, 0.9f);
+  RayInCube r;
+  r.origin = {u(random), u(random), u(random)};
+  r.ray = makeRay(r.origin, normalize(Vec3f{u(random), u(random), u(random)}));
+  float tEnter;
+  intersectBox(r.ray, kCube, 0.f, INFINITY, tEnter, r.tExit);
+  return r;
+}
+
 } // namespace
 
 // Samples a short step apart along random rays, each located from the previous one's cell with the weights
 // carried along the ray, land in a cell holding them and get the value that cell interpolates there: with
 // the tets' corners read, as on the GPU, and with their affine records, as on the host.
 TEST(WalkTets, CarriedWeightsGiveTheCellsOwnValues) {
-  const Box3f box{{-1.f, -1.f, -1.f}, {1.f, 1.f, 1.f}};
-  const Mesh mesh = buildMesh(makeBoxGrid(
-                                  CellType::Tetra, 5, box, [](Vec3f p) { return p.x * p.y + p.z; }, 0.3f, 11),
-                              "box");
+  const Mesh mesh =
+      buildMesh(makeBoxGrid(
+                    CellType::Tetra, 5, kCube, [](Vec3f p) { return p.x * p.y + p.z; }, 0.3f, 11),
+                "box");
   for (const auto [field, records] : {std::pair{0, false}, {-1, false}, {0, true}, {-1, true}}) {
     SCOPED_TRACE(testing::Message() << "field " << field << (records ? ", affine records" : ", corners"));
     const bool cellData = field < 0;
@@ -54,13 +72,9 @@ TEST(WalkTets, CarriedWeightsGiveTheCellsOwnValues) {
     const std::vector<TetAffine> affine = records ? buildTetAffine(scene.mesh) : std::vector<TetAffine>{};
     scene.tetAffine = records ? affine.data() : nullptr;
     std::mt19937 random(2);
-    std::uniform_real_distribution<float> u(-0.9f, 0.9f);
     int carried = 0, walked = 0;
     for (int r = 0; r < 200; ++r) {
-      const Vec3f origin{u(random), u(random), u(random)};
-      const Ray ray = makeRay(origin, normalize(Vec3f{u(random), u(random), u(random)}));
-      float tEnter, tExit;
-      ASSERT_TRUE(intersectBox(ray, box, 0.f, INFINITY, tEnter, tExit));
+      const auto [origin, ray, tExit] = randomRayInCube(random);
       RayCell at;
       at.cell = cellHolding(scene.mesh, origin);
       ASSERT_NE(at.cell, kNoCell);
@@ -119,11 +133,10 @@ TEST(CellNeighbors, LinkEachInnerFaceBothWays) {
 // faces' planes only approximate the faces of such distorted cells, so a walk may circle and give up (the
 // caller then asks the seed grid or the BVH), but seldom.
 TEST(WalkCells, FindTheCellHoldingEachSample) {
-  const Box3f box{{-1.f, -1.f, -1.f}, {1.f, 1.f, 1.f}};
   for (const CellType type : {CellType::Hexahedron, CellType::Wedge, CellType::Pyramid}) {
     SCOPED_TRACE(int(type));
     const Mesh mesh = buildMesh(makeBoxGrid(
-                                    type, 5, box, [](Vec3f p) { return p.x * p.y + p.z; }, 0.3f, 11),
+                                    type, 5, kCube, [](Vec3f p) { return p.x * p.y + p.z; }, 0.3f, 11),
                                 "lattice");
     const std::vector<uint32_t> neighbors = buildCellNeighbors(mesh);
     SceneView scene;
@@ -132,13 +145,9 @@ TEST(WalkCells, FindTheCellHoldingEachSample) {
     scene.cellNeighbors = neighbors.data();
     scene.cellFacePlanes = planes.data();
     std::mt19937 random(3);
-    std::uniform_real_distribution<float> u(-0.9f, 0.9f);
     int steps = 0, walks = 0, failed = 0;
     for (int r = 0; r < 100; ++r) {
-      const Vec3f origin{u(random), u(random), u(random)};
-      const Ray ray = makeRay(origin, normalize(Vec3f{u(random), u(random), u(random)}));
-      float tEnter, tExit;
-      ASSERT_TRUE(intersectBox(ray, box, 0.f, INFINITY, tEnter, tExit));
+      const auto [origin, ray, tExit] = randomRayInCube(random);
       RayCell at;
       at.cell = cellHolding(scene.mesh, origin);
       ASSERT_NE(at.cell, kNoCell);
