@@ -23,9 +23,11 @@ struct FaceKey {
   }
 };
 
-constexpr int kTetFaceCorners[4][3] = {{1, 2, 3}, {0, 2, 3}, {0, 1, 3}, {0, 1, 2}}; // opposite corner i
-
 } // namespace
+
+uint64_t cellAdjacencyBytes(uint64_t otherCells) {
+  return otherCells * kMaxCellFaces * (sizeof(uint32_t) + sizeof(Vec4f) + sizeof(FaceKey));
+}
 
 std::vector<uint32_t> buildCellNeighbors(const Mesh &cells) {
   const MeshView mesh = makeMeshView(cells, -1);
@@ -55,10 +57,10 @@ std::vector<uint32_t> buildCellNeighbors(const Mesh &cells) {
   });
   for (uint64_t tet = 0; tet < mesh.tetCount; ++tet) {
     const uint32_t *v = mesh.tets + 4 * tet;
-    for (int f = 0; f < 4; ++f) {
-      const int *c = kTetFaceCorners[f];
-      if (onOtherCell[v[c[0]]] && onOtherCell[v[c[1]]] && onOtherCell[v[c[2]]]) {
-        FaceKey key{{v[c[0]], v[c[1]], v[c[2]], kNoCell}, uint32_t(tet), uint8_t(f)};
+    for (int f = 0; f < 4; ++f) { // face f is the one opposite corner f, as in tetFaceCorners
+      const uint32_t a = v[(f + 1) & 3], b = v[(f + 2) & 3], c = v[(f + 3) & 3];
+      if (onOtherCell[a] && onOtherCell[b] && onOtherCell[c]) {
+        FaceKey key{{a, b, c, kNoCell}, uint32_t(tet), uint8_t(f)};
         std::sort(key.points.begin(), key.points.end());
         keys.push_back(key);
       }

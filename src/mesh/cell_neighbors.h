@@ -40,6 +40,10 @@ UVR_HOST_DEVICE inline CellFaces cellFaces(CellType type) {
 /// mesh of tets alone.
 std::vector<uint32_t> buildCellNeighbors(const Mesh &mesh);
 
+/// The most memory buildCellNeighbors and buildCellFacePlanes take together for `otherCells` cells that are
+/// not tets: what they keep (120 bytes a cell) and the face keys the adjacency is sorted from.
+uint64_t cellAdjacencyBytes(uint64_t otherCells);
+
 /// Per cell that is not a tet, its faces' planes (cellFaces' order) as (n, w): n·p + w is how far `p` lies
 /// beyond the face, in units of the cell's size (its centre's distance to its first corner). A quad's plane
 /// is taken through its centre, normal to its diagonals' cross product; each normal is turned away from the

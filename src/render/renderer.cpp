@@ -53,8 +53,8 @@ Backend parseBackend(const std::string &name) {
 namespace {
 
 /// Whether a structure that only speeds walks up may take `bytes`: the per-tet records (64 bytes a tet) and
-/// the other cells' adjacency (120 bytes a cell, 144 more while it is built) would cost more than a large
-/// mesh on a small machine could spare, so each is kept to an eighth of the memory.
+/// the other cells' adjacency (cellAdjacencyBytes) would cost more than a large mesh on a small machine could
+/// spare, so each is kept to an eighth of the memory.
 bool walkAidFits(uint64_t bytes) {
   const long pages = sysconf(_SC_PHYS_PAGES), pageBytes = sysconf(_SC_PAGE_SIZE);
   return pages > 0 && pageBytes > 0 && bytes <= uint64_t(pages) * uint64_t(pageBytes) / 8;
@@ -78,7 +78,7 @@ const HostAcceleration &Renderer::host() const {
     built->occupancy = buildOccupancyGrid(meshView_);
     built->tetNeighbors = buildTetNeighbors(mesh_);
     const uint64_t otherCells = meshView_.cellCount() - meshView_.tetCount;
-    if (walkAidFits(otherCells * (kMaxCellFaces * (sizeof(uint32_t) + sizeof(Vec4f)) + 144))) {
+    if (walkAidFits(cellAdjacencyBytes(otherCells))) {
       built->cellNeighbors = buildCellNeighbors(mesh_);
       built->cellFacePlanes = buildCellFacePlanes(meshView_);
     }
