@@ -80,7 +80,7 @@ TEST(WalkTets, CarriedWeightsGiveTheCellsOwnValues) {
       ASSERT_NE(at.cell, kNoCell);
       for (float t = 0.f; t < tExit; t += 0.05f) {
         float value;
-        ASSERT_TRUE(walkTets(scene, ray, t, at.cell, 64, at, value)) << "ray " << r << " t " << t;
+        ASSERT_TRUE(walkTets(scene, ray, t, at.cell, true, 64, at, value)) << "ray " << r << " t " << t;
         const Vec3f p = ray.at(t);
         ASSERT_TRUE(cellContains(scene.mesh, at.cell, p));
         float expected;
@@ -93,6 +93,57 @@ TEST(WalkTets, CarriedWeightsGiveTheCellsOwnValues) {
     EXPECT_GT(carried, walked);
     EXPECT_GT(walked, 200);
   }
+}
+
+// The face a ray leaves a tet by, named from the weights of a point beyond the tet, is the face whose
+// triangle the ray crosses, found by intersecting the ray with each face; and where that face's neighbour is
+// the boundary, a walk along the ray goes on across it rather than across the face the point lies furthest
+// beyond.
+TEST(WalkTets, LeaveByTheFaceTheRayCrosses) {
+  std::mt19937 random(4);
+  std::uniform_real_distribution<float> u(-1.f, 1.f), inside(0.05f, 1.f);
+  int checked = 0;
+  for (int trial = 0; trial < 2000; ++trial) {
+    Vec3f v[4];
+    for (Vec3f &corner : v)
+      corner = {u(random), u(random), u(random)};
+    const float volume = dot(cross(v[1] - v[0], v[2] - v[0]), v[3] - v[0]);
+    if (std::abs(volume) < 0.05f)
+      continue;
+    // A point inside, a direction, and a sample well past the tet.
+    float b[4] = {inside(random), inside(random), inside(random), inside(random)};
+    const float sum = b[0] + b[1] + b[2] + b[3];
+    const Vec3f origin = (v[0] * b[0] + v[1] * b[1] + v[2] * b[2] + v[3] * b[3]) / sum;
+    const Ray ray = makeRay(origin, normalize(Vec3f{u(random), u(random), u(random)}));
+    float w[4], dw[4];
+    ASSERT_TRUE(tetBarycentricsAlong(v[0], v[1], v[2], v[3], ray.at(5.f), ray.direction, w, dw));
+    // The face opposite corner f has corners f + 1, f + 2, f + 3 (mod 4); the ray, starting inside, crosses
+    // exactly one face's triangle at t > 0.
+    int crossed = -1;
+    for (int f = 0; f < 4; ++f) {
+      const Vec3f a = v[(f + 1) & 3], e1 = v[(f + 2) & 3] - a, e2 = v[(f + 3) & 3] - a;
+      const Vec3f q = cross(ray.direction, e2);
+      const float det = dot(e1, q), inv = 1.f / det;
+      const Vec3f s = ray.origin - a;
+      const float alpha = dot(s, q) * inv;
+      const Vec3f r = cross(s, e1);
+      const float beta = dot(ray.direction, r) * inv, t = dot(e2, r) * inv;
+      if (alpha > 1e-3f && beta > 1e-3f && alpha + beta < 1.f - 1e-3f && t > 0.f)
+        crossed = f;
+    }
+    if (crossed < 0)
+      continue; // through an edge or a corner, within the tolerance
+    float lowest;
+    const int beyond = smallestWeight(w, lowest);
+    EXPECT_EQ(rayExitFace(w, dw, beyond), crossed) << "trial " << trial;
+    uint32_t across[4] = {10, 11, 12, 13};
+    across[beyond] = kNoCell;
+    const uint32_t expected = crossed == beyond ? kNoCell : 10 + uint32_t(crossed);
+    EXPECT_EQ(nextTet(across, 0, beyond, w, dw, true), expected) << "trial " << trial;
+    EXPECT_EQ(nextTet(across, 0, beyond, w, dw, false), kNoCell);
+    ++checked;
+  }
+  EXPECT_GT(checked, 1000);
 }
 
 // Across every face inside a lattice of each cell type there is the cell on the other side, and only there:

@@ -58,6 +58,21 @@ UVR_HOST_DEVICE inline int smallestWeight(const float w[4], float &lowest) {
   return low23 ? 2 + int(low3) : int(low1);
 }
 
+/// The face by which a ray leaves a tet on its way to a point beyond it, given the point's weights `w` and
+/// their change `dw` per unit step along the ray: of the faces the point lies beyond (w < 0) and the ray
+/// runs out through (dw < 0), the one crossed first, farthest back from the point (largest w / dw). Where
+/// none is (rounding, or a tet the ray misses), `otherwise`.
+UVR_HOST_DEVICE inline int rayExitFace(const float w[4], const float dw[4], int otherwise) {
+  float back[4];
+  for (int i = 0; i < 4; ++i)
+    back[i] = w[i] < 0.f && dw[i] < 0.f ? w[i] / dw[i] : -1.f;
+  const bool back1 = back[1] > back[0], back3 = back[3] > back[2];
+  const float farthest01 = back1 ? back[1] : back[0], farthest23 = back3 ? back[3] : back[2];
+  const bool back23 = farthest23 > farthest01;
+  const float farthest = back23 ? farthest23 : farthest01;
+  return farthest >= 0.f ? (back23 ? 2 + int(back3) : int(back1)) : otherwise;
+}
+
 /// Barycentric weights of `p` in tetrahedron (a, b, c, d); false when `p` is outside or the cell is flat.
 UVR_HOST_DEVICE inline bool tetWeights(Vec3f a, Vec3f b, Vec3f c, Vec3f d, Vec3f p, float w[4]) {
   if (!tetBarycentrics(a, b, c, d, p, w))

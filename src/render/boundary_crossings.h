@@ -70,11 +70,14 @@ UVR_HOST_DEVICE inline BoundaryCrossings pixelCrossings(const uint64_t *start, c
 /// Where the ray leaves the gap in the mesh that holds t, if it lies in one: the crossing after the last one
 /// at or before t, where the ray goes out of the mesh and that one back in, and t lies farther than `margin`
 /// from both; else t. `next` is where the search starts among the keys, and is left at the first crossing
-/// past t: along a ray, t only grows. `entered` is set to the face the ray comes back in by.
+/// past t: along a ray, t only grows. `entered` is set to the face the ray comes back in by: of a gap that
+/// holds t, or of the last crossing passed since the previous call where that one leads into the mesh (a
+/// gap between two samples); else kNoCell.
 UVR_HOST_DEVICE inline float afterGap(const BoundaryCrossings &crossings, float t, float margin,
                                       uint32_t &next, uint32_t &entered) {
-  while (next < crossings.count && crossingT(crossings.keys[next]) <= t)
-    ++next;
+  entered = kNoCell;
+  for (; next < crossings.count && crossingT(crossings.keys[next]) <= t; ++next)
+    entered = crossingExits(crossings.keys[next]) ? kNoCell : crossingFace(crossings.keys[next]);
   if (next == 0 || next == crossings.count)
     return t; // before the first crossing or after the last: the march's interval leaves those out
   const uint64_t before = crossings.keys[next - 1], after = crossings.keys[next];

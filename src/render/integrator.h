@@ -62,17 +62,31 @@ struct SceneView {
 /// multiply-adds and no loads, and where it lies beyond, its weights name the face to walk across.
 struct RayCell {
   uint32_t cell = kNoCell;
+  bool onRay = false;  ///< whether the ray passes through `cell`: where not, `cell` is a guess near it
   bool affine = false; ///< whether the members below describe `cell` (a tet) on this ray
   float t = 0.f;       ///< where they were evaluated
   float w[4], dw[4];
   float value, dvalue;
 };
 
+/// The tet across the face of `tet` that a walk towards a point with weights `w` crosses: the face the point
+/// lies furthest beyond (`beyond`); where that is the mesh's boundary and the walk follows a ray
+/// (`alongRay`), the face the ray leaves by, whose weights change by `dw` along it. A walk from a tet on the
+/// ray thus goes on around a concavity, where the point, inside the mesh, lies beyond the boundary as seen
+/// from a tet on the way; a walk from a guess gives up at once.
+UVR_HOST_DEVICE inline uint32_t nextTet(const uint32_t *tetNeighbors, uint32_t tet, int beyond,
+                                        const float w[4], const float dw[4], bool alongRay) {
+  const uint32_t *across = tetNeighbors + 4 * uint64_t(tet);
+  const uint32_t next = across[beyond];
+  return next != kNoCell || !alongRay ? next : across[rayExitFace(w, dw, beyond)];
+}
+
 /// Steps through tets towards the sample at `t` on `ray`, from `start` across the face the sample lies
-/// furthest beyond, as long as that is a tet; on success `at` describes the tet holding the sample and
-/// `value` is the field there. Gives up after `maxSteps` tets.
+/// furthest beyond (see nextTet; `alongRay`: the ray passes through `start`), as long as that is a tet; on
+/// success `at` describes the tet holding the sample and `value` is the field there. Gives up after
+/// `maxSteps` tets.
 UVR_HOST_DEVICE inline bool walkTets(const SceneView &scene, const Ray &ray, float t, uint32_t start,
-                                     int maxSteps, RayCell &at, float &value) {
+                                     bool alongRay, int maxSteps, RayCell &at, float &value) {
   const MeshView &mesh = scene.mesh;
   uint32_t current = start;
   int step = 0;
@@ -87,7 +101,7 @@ UVR_HOST_DEVICE inline bool walkTets(const SceneView &scene, const Ray &ray, flo
       value = at.value + s * at.dvalue;
       return true;
     }
-    current = scene.tetNeighbors[4 * uint64_t(current) + uint64_t(exit)];
+    current = nextTet(scene.tetNeighbors, current, exit, w, at.dw, alongRay);
     step = 1;
   }
   const Vec3f p = ray.at(t);
@@ -126,6 +140,7 @@ UVR_HOST_DEVICE inline bool walkTets(const SceneView &scene, const Ray &ray, flo
         slope = dw[0] * v0 + dw[1] * v1 + dw[2] * v2 + dw[3] * v3;
       }
       at.cell = current;
+      at.onRay = true;
       at.affine = true;
       at.t = t;
       for (int i = 0; i < 4; ++i) {
@@ -136,8 +151,12 @@ UVR_HOST_DEVICE inline bool walkTets(const SceneView &scene, const Ray &ray, flo
       at.dvalue = slope;
       return true;
     }
-    current = scene.tetNeighbors[4 * uint64_t(current) + uint64_t(exit)];
+    current = nextTet(scene.tetNeighbors, current, exit, w, dw, alongRay);
   }
+  // Where a walk along the ray left the mesh, so did the ray: later walks from `at` stop at the boundary,
+  // rather than follow the ray out again for every sample in the empty space beyond.
+  if (alongRay && current == kNoCell)
+    at.onRay = false;
   return false;
 }
 
@@ -151,13 +170,14 @@ UVR_HOST_DEVICE inline bool walkCells(const SceneView &scene, const Ray &ray, fl
   uint32_t current = start;
   for (int step = 0; step < maxSteps && current != kNoCell; ++step) {
     if (current < mesh.tetCount)
-      return scene.tetNeighbors && walkTets(scene, ray, t, current, maxSteps - step, at, value);
+      return scene.tetNeighbors && walkTets(scene, ray, t, current, false, maxSteps - step, at, value);
     const uint64_t other = uint64_t(current) - mesh.tetCount;
     float beyond;
     const int face = furthestFace(scene.cellFacePlanes, other, p, beyond);
     // Faces of distorted cells are not planar: near their planes, the cell's own test decides.
     if (beyond <= 0.25f && sampleCell(mesh, current, p, value)) {
       at.cell = current;
+      at.onRay = true;
       at.affine = false;
       return true;
     }
@@ -184,7 +204,7 @@ UVR_HOST_DEVICE inline bool locateSample(const SceneView &scene, bool skipEmpty,
   // A walk from `start`; a cell other than a tet is tested alone.
   auto locateFrom = [&](uint32_t start, int steps) {
     if (scene.tetNeighbors && start < scene.mesh.tetCount)
-      return walkTets(scene, ray, t, start, steps, at, value);
+      return walkTets(scene, ray, t, start, start == at.cell && at.onRay, steps, at, value);
 #ifndef __CUDA_ARCH__ // the GPU does not build the other cells' adjacency: no code for it in its kernels
     if (scene.cellNeighbors && scene.cellFacePlanes && start >= scene.mesh.tetCount)
       return walkCells(scene, ray, t, start, steps, at, value);
@@ -192,6 +212,7 @@ UVR_HOST_DEVICE inline bool locateSample(const SceneView &scene, bool skipEmpty,
     if (!sampleCell(scene.mesh, start, p, value))
       return false;
     at.cell = start;
+    at.onRay = true;
     at.affine = false;
     return true;
   };
@@ -210,6 +231,7 @@ UVR_HOST_DEVICE inline bool locateSample(const SceneView &scene, bool skipEmpty,
     if (candidate == start || !sampleCell(scene.mesh, candidate, p, value))
       return false;
     at.cell = candidate;
+    at.onRay = true;
     at.affine = false;
     return true;
   });
@@ -250,8 +272,10 @@ UVR_HOST_DEVICE inline RayResult integrateRay(const SceneView &scene, const Inte
       return result;
     tStart = maxf(tEnter, crossings.first - margin);
     tStop = minf(tExit, crossings.last + margin);
-    if (crossings.face != kNoCell)
+    if (crossings.face != kNoCell) {
       at.cell = crossings.face >> 2;
+      at.onRay = true;
+    }
   }
   const float s1 = settings.s1;
   // Grid points in the gaps between the ray's crossings out of the mesh and back in are passed over; the
@@ -286,11 +310,14 @@ UVR_HOST_DEVICE inline RayResult integrateRay(const SceneView &scene, const Inte
       if (gaps) {
         uint32_t entered;
         const float resume = afterGap(crossings, t, margin, nextCrossing, entered);
+        if (entered != kNoCell) {
+          at.cell = entered >> 2;
+          at.onRay = true;
+          at.affine = false;
+        }
         if (resume > t) {
           k = gridIndex(resume);
           t = tEnter + k * s1;
-          at.cell = entered >> 2;
-          at.affine = false;
           if (!(t < tb))
             break;
         }
