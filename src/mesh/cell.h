@@ -63,14 +63,12 @@ UVR_HOST_DEVICE inline int smallestWeight(const float w[4], float &lowest) {
 /// runs out through (dw < 0), the one crossed first, farthest back from the point (largest w / dw). Where
 /// none is (rounding, or a tet the ray misses), `otherwise`.
 UVR_HOST_DEVICE inline int rayExitFace(const float w[4], const float dw[4], int otherwise) {
-  float back[4];
+  float ahead[4]; // where the ray crosses each face, from the point on: negative behind it
   for (int i = 0; i < 4; ++i)
-    back[i] = w[i] < 0.f && dw[i] < 0.f ? w[i] / dw[i] : -1.f;
-  const bool back1 = back[1] > back[0], back3 = back[3] > back[2];
-  const float farthest01 = back1 ? back[1] : back[0], farthest23 = back3 ? back[3] : back[2];
-  const bool back23 = farthest23 > farthest01;
-  const float farthest = back23 ? farthest23 : farthest01;
-  return farthest >= 0.f ? (back23 ? 2 + int(back3) : int(back1)) : otherwise;
+    ahead[i] = w[i] < 0.f && dw[i] < 0.f ? -w[i] / dw[i] : 1.f;
+  float nearest;
+  const int face = smallestWeight(ahead, nearest);
+  return nearest <= 0.f ? face : otherwise;
 }
 
 /// Barycentric weights of `p` in tetrahedron (a, b, c, d); false when `p` is outside or the cell is flat.

@@ -67,6 +67,13 @@ struct RayCell {
   float t = 0.f;       ///< where they were evaluated
   float w[4], dw[4];
   float value, dvalue;
+
+  /// Moves to `to`, a cell the ray passes through, with no weights known there yet.
+  UVR_HOST_DEVICE void enter(uint32_t to) {
+    cell = to;
+    onRay = true;
+    affine = false;
+  }
 };
 
 /// The tet across the face of `tet` that a walk towards a point with weights `w` crosses: the face the point
@@ -176,9 +183,7 @@ UVR_HOST_DEVICE inline bool walkCells(const SceneView &scene, const Ray &ray, fl
     const int face = furthestFace(scene.cellFacePlanes, other, p, beyond);
     // Faces of distorted cells are not planar: near their planes, the cell's own test decides.
     if (beyond <= 0.25f && sampleCell(mesh, current, p, value)) {
-      at.cell = current;
-      at.onRay = true;
-      at.affine = false;
+      at.enter(current);
       return true;
     }
     current = scene.cellNeighbors[kMaxCellFaces * other + uint64_t(face)];
@@ -211,9 +216,7 @@ UVR_HOST_DEVICE inline bool locateSample(const SceneView &scene, bool skipEmpty,
 #endif
     if (!sampleCell(scene.mesh, start, p, value))
       return false;
-    at.cell = start;
-    at.onRay = true;
-    at.affine = false;
+    at.enter(start);
     return true;
   };
   const uint32_t seed = far || at.cell == kNoCell ? scene.seeds.seedAt(p) : kNoCell;
@@ -230,9 +233,7 @@ UVR_HOST_DEVICE inline bool locateSample(const SceneView &scene, bool skipEmpty,
   return findCell(scene.bvh, p, [&](uint32_t candidate) {
     if (candidate == start || !sampleCell(scene.mesh, candidate, p, value))
       return false;
-    at.cell = candidate;
-    at.onRay = true;
-    at.affine = false;
+    at.enter(candidate);
     return true;
   });
 }
@@ -272,10 +273,8 @@ UVR_HOST_DEVICE inline RayResult integrateRay(const SceneView &scene, const Inte
       return result;
     tStart = maxf(tEnter, crossings.first - margin);
     tStop = minf(tExit, crossings.last + margin);
-    if (crossings.face != kNoCell) {
-      at.cell = crossings.face >> 2;
-      at.onRay = true;
-    }
+    if (crossings.face != kNoCell)
+      at.enter(crossings.face >> 2);
   }
   const float s1 = settings.s1;
   // Grid points in the gaps between the ray's crossings out of the mesh and back in are passed over; the
@@ -310,11 +309,8 @@ UVR_HOST_DEVICE inline RayResult integrateRay(const SceneView &scene, const Inte
       if (gaps) {
         uint32_t entered;
         const float resume = afterGap(crossings, t, margin, nextCrossing, entered);
-        if (entered != kNoCell) {
-          at.cell = entered >> 2;
-          at.onRay = true;
-          at.affine = false;
-        }
+        if (entered != kNoCell)
+          at.enter(entered >> 2);
         if (resume > t) {
           k = gridIndex(resume);
           t = tEnter + k * s1;
