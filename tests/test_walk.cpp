@@ -139,8 +139,8 @@ TEST(WalkTets, LeaveByTheFaceTheRayCrosses) {
     uint32_t across[4] = {10, 11, 12, 13};
     across[beyond] = kNoCell;
     const uint32_t expected = crossed == beyond ? kNoCell : 10 + uint32_t(crossed);
-    EXPECT_EQ(nextTet(across, 0, beyond, w, dw, true), expected) << "trial " << trial;
-    EXPECT_EQ(nextTet(across, 0, beyond, w, dw, false), kNoCell);
+    EXPECT_EQ(nextTet(Index4::load(across), beyond, w, dw, true), expected) << "trial " << trial;
+    EXPECT_EQ(nextTet(Index4::load(across), beyond, w, dw, false), kNoCell);
     ++checked;
   }
   EXPECT_GT(checked, 1000);

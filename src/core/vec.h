@@ -4,6 +4,7 @@
 #include "core/host_device.h"
 
 #include <cmath>
+#include <cstdint>
 
 namespace uvr {
 
@@ -39,6 +40,23 @@ UVR_HOST_DEVICE inline Vec3f vmax(Vec3f a, Vec3f b) {
 
 struct Vec4f {
   float x = 0.f, y = 0.f, z = 0.f, w = 0.f;
+};
+
+/// Four indices read at once, such as a tet's corners or neighbours: one 16-byte load on a GPU.
+struct Index4 {
+  uint32_t x, y, z, w;
+
+  /// The four at `p`, which is 16-byte aligned on a GPU.
+  UVR_HOST_DEVICE static Index4 load(const uint32_t *p) {
+#ifdef __CUDA_ARCH__
+    const uint4 q = *reinterpret_cast<const uint4 *>(p);
+    return {q.x, q.y, q.z, q.w};
+#else
+    return {p[0], p[1], p[2], p[3]};
+#endif
+  }
+  /// Selects, not an index: a GPU keeps an array indexed at run time in local memory.
+  UVR_HOST_DEVICE uint32_t operator[](int i) const { return i < 2 ? (i == 0 ? x : y) : (i == 2 ? z : w); }
 };
 
 /// Axis-aligned box; empty when lower > upper on any axis.

@@ -76,14 +76,14 @@ struct RayCell {
   }
 };
 
-/// The tet across the face of `tet` that a walk towards a point with weights `w` crosses: the face the point
-/// lies furthest beyond (`beyond`); where that is the mesh's boundary and the walk follows a ray
+/// The tet, of those `across` the faces of a tet, that a walk towards a point with weights `w` crosses: the
+/// face the point lies furthest beyond (`beyond`); where that is the mesh's boundary and the walk follows a
+/// ray
 /// (`alongRay`), the face the ray leaves by, whose weights change by `dw` along it. A walk from a tet on the
 /// ray thus goes on around a concavity, where the point, inside the mesh, lies beyond the boundary as seen
 /// from a tet on the way; a walk from a guess gives up at once.
-UVR_HOST_DEVICE inline uint32_t nextTet(const uint32_t *tetNeighbors, uint32_t tet, int beyond,
-                                        const float w[4], const float dw[4], bool alongRay) {
-  const uint32_t *across = tetNeighbors + 4 * uint64_t(tet);
+UVR_HOST_DEVICE inline uint32_t nextTet(Index4 across, int beyond, const float w[4], const float dw[4],
+                                        bool alongRay) {
   const uint32_t next = across[beyond];
   return next != kNoCell || !alongRay ? next : across[rayExitFace(w, dw, beyond)];
 }
@@ -99,6 +99,7 @@ UVR_HOST_DEVICE inline bool walkTets(const SceneView &scene, const Ray &ray, flo
   int step = 0;
   float w[4];
   if (at.affine && at.cell == start) {
+    const Index4 across = Index4::load(scene.tetNeighbors + 4 * uint64_t(current));
     const float s = t - at.t;
     for (int i = 0; i < 4; ++i)
       w[i] = at.w[i] + s * at.dw[i];
@@ -108,11 +109,14 @@ UVR_HOST_DEVICE inline bool walkTets(const SceneView &scene, const Ray &ray, flo
       value = at.value + s * at.dvalue;
       return true;
     }
-    current = nextTet(scene.tetNeighbors, current, exit, w, at.dw, alongRay);
+    current = nextTet(across, exit, w, at.dw, alongRay);
     step = 1;
   }
   const Vec3f p = ray.at(t);
   for (; step < maxSteps && current < mesh.tetCount; ++step) {
+    // Read with the corners, not once the face to cross is known: the next tet is then at hand.
+    const Index4 across = Index4::load(scene.tetNeighbors + 4 * uint64_t(current));
+    const Index4 v = Index4::load(mesh.tets + 4 * uint64_t(current));
 #ifdef __CUDA_ARCH__
     const TetAffine *affine = nullptr; // none on the GPU (see tet_affine.h): no code for them in its kernels
 #else
@@ -120,17 +124,15 @@ UVR_HOST_DEVICE inline bool walkTets(const SceneView &scene, const Ray &ray, flo
     // The walk's next tet, or the next sample's, is one of these: fetching all four while this one is
     // evaluated hides most of the miss on the next (3M brain, `full`: 9 % faster).
     if (affine) {
-      const uint32_t *across = scene.tetNeighbors + 4 * uint64_t(current);
       for (int i = 0; i < 4; ++i)
         if (across[i] < mesh.tetCount)
           __builtin_prefetch(scene.tetAffine + across[i]);
     }
 #endif
-    const uint32_t *v = mesh.tets + 4 * uint64_t(current);
     float dw[4];
     if (affine ? !affine->weightsAlong(p, ray.direction, w, dw)
-               : !tetBarycentricsAlong(mesh.points[v[0]], mesh.points[v[1]], mesh.points[v[2]],
-                                       mesh.points[v[3]], p, ray.direction, w, dw))
+               : !tetBarycentricsAlong(mesh.points[v.x], mesh.points[v.y], mesh.points[v.z], mesh.points[v.w],
+                                       p, ray.direction, w, dw))
       return false;
     float lowest;
     const int exit = smallestWeight(w, lowest);
@@ -141,8 +143,8 @@ UVR_HOST_DEVICE inline bool walkTets(const SceneView &scene, const Ray &ray, flo
       } else if (mesh.cellCentered) {
         value = mesh.values[current];
       } else {
-        const float v0 = mesh.values[v[0]], v1 = mesh.values[v[1]], v2 = mesh.values[v[2]],
-                    v3 = mesh.values[v[3]];
+        const float v0 = mesh.values[v.x], v1 = mesh.values[v.y], v2 = mesh.values[v.z],
+                    v3 = mesh.values[v.w];
         value = w[0] * v0 + w[1] * v1 + w[2] * v2 + w[3] * v3;
         slope = dw[0] * v0 + dw[1] * v1 + dw[2] * v2 + dw[3] * v3;
       }
@@ -158,7 +160,7 @@ UVR_HOST_DEVICE inline bool walkTets(const SceneView &scene, const Ray &ray, flo
       at.dvalue = slope;
       return true;
     }
-    current = nextTet(scene.tetNeighbors, current, exit, w, dw, alongRay);
+    current = nextTet(across, exit, w, dw, alongRay);
   }
   // Where a walk along the ray left the mesh, so did the ray: later walks from `at` stop at the boundary,
   // rather than follow the ray out again for every sample in the empty space beyond.
