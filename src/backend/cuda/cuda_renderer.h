@@ -41,7 +41,8 @@ public:
   const std::vector<std::pair<std::string, double>> &buildSteps() const;
 
   /// Renders into `target`'s host buffers (width x height pixels; those null are not copied back) and
-  /// `samples`; returns the milliseconds the kernel took on the GPU, without the copies.
+  /// `samples`; returns the milliseconds the frame's kernels took on the GPU (crossings pass and render
+  /// kernel), without the copies.
   double render(const CameraView &camera, const IntegratorSettings &settings, const PixelTarget &target,
                 int height, SampleTotals &samples);
 
