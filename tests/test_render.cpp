@@ -402,6 +402,39 @@ TEST_P(Integrator, GapsBetweenBoundaryCrossingsTakeNoSample) {
 // Each pixel's crossings with the boundary faces, against every face tested in double precision: the
 // projected boxes leave out no pixel whose ray crosses a face, the crossings come in order of t, and each
 // says rightly whether the ray leaves the mesh there.
+// Along a ray that enters the mesh at t = 1, leaves at 3, enters again at 6 and leaves at 9, samples in the
+// gap move on to its end, and each call says which face the ray came back in by since the one before.
+TEST(BoundaryCrossings, AfterGapFollowsTheMarch) {
+  const uint64_t keys[4] = {crossingKey(1.f, 10, false), crossingKey(3.f, 11, true),
+                            crossingKey(6.f, 12, false), crossingKey(9.f, 13, true)};
+  BoundaryCrossings crossings;
+  crossings.keys = keys;
+  crossings.count = 4;
+  const float margin = 0.01f;
+  struct Step {
+    float t, resume;
+    uint32_t entered;
+  };
+  // A sample at a crossing has passed it; one within the margin of the gap's ends is taken where it is.
+  const Step steps[] = {
+      {0.5f, 0.5f, kNoCell},     {1.f, 1.f, 10},          {2.f, 2.f, kNoCell},       {2.5f, 2.5f, kNoCell},
+      {3.005f, 3.005f, kNoCell}, {4.f, 6.f - margin, 12}, {5.995f, 5.995f, kNoCell}, {7.f, 7.f, 12},
+      {8.f, 8.f, kNoCell},       {10.f, 10.f, kNoCell}};
+  CrossingCursor cursor;
+  for (const Step &step : steps) {
+    uint32_t entered;
+    EXPECT_FLOAT_EQ(afterGap(crossings, step.t, margin, cursor, entered), step.resume) << "t " << step.t;
+    EXPECT_EQ(entered, step.entered) << "t " << step.t;
+  }
+  // Samples spaced past a whole gap: the face the ray re-entered by, though no sample fell in the gap.
+  CrossingCursor skipping;
+  uint32_t entered;
+  EXPECT_FLOAT_EQ(afterGap(crossings, 2.f, margin, skipping, entered), 2.f);
+  EXPECT_EQ(entered, 10u);
+  EXPECT_FLOAT_EQ(afterGap(crossings, 7.f, margin, skipping, entered), 7.f);
+  EXPECT_EQ(entered, 12u);
+}
+
 TEST(BoundaryCrossings, FindEachRaysFirstAndLastCrossing) {
   const Mesh mesh = notchedShell();
   const MeshView view = makeMeshView(mesh, -1);

@@ -67,25 +67,39 @@ UVR_HOST_DEVICE inline BoundaryCrossings pixelCrossings(const uint64_t *start, c
   return crossings;
 }
 
+/// Where a march stands among its ray's crossings (see afterGap): the first crossing not yet passed, and what
+/// the march needs of it, so that most samples read none.
+struct CrossingCursor {
+  uint32_t next = 0;
+  float nextT = -INFINITY; ///< t of crossing `next`, INFINITY past the last; -INFINITY before the first look
+  bool inGap = false;      ///< whether crossing next - 1 leaves the mesh and crossing `next` enters it again
+};
+
 /// Where the ray leaves the gap in the mesh that holds t, if it lies in one: the crossing after the last one
 /// at or before t, where the ray goes out of the mesh and that one back in, and t lies farther than `margin`
-/// from both; else t. `next` is where the search starts among the keys, and is left at the first crossing
-/// past t: along a ray, t only grows. `entered` is set to the face the ray comes back in by: of a gap that
-/// holds t, or of the last crossing passed since the previous call where that one leads into the mesh (a
-/// gap between two samples); else kNoCell.
+/// from both; else t. `cursor` is left at the first crossing past t: along a ray, t only grows. `entered` is
+/// set to the face the ray comes back in by: of a gap that holds t, or of the last crossing passed since the
+/// previous call where that one leads into the mesh (a gap between two samples); else kNoCell.
 UVR_HOST_DEVICE inline float afterGap(const BoundaryCrossings &crossings, float t, float margin,
-                                      uint32_t &next, uint32_t &entered) {
+                                      CrossingCursor &cursor, uint32_t &entered) {
   entered = kNoCell;
+  if (t < cursor.nextT && !cursor.inGap)
+    return t;
+  uint32_t next = cursor.next;
   for (; next < crossings.count && crossingT(crossings.keys[next]) <= t; ++next)
     entered = crossingExits(crossings.keys[next]) ? kNoCell : crossingFace(crossings.keys[next]);
-  if (next == 0 || next == crossings.count)
-    return t; // before the first crossing or after the last: the march's interval leaves those out
-  const uint64_t before = crossings.keys[next - 1], after = crossings.keys[next];
-  if (!crossingExits(before) || crossingExits(after) || !(t > crossingT(before) + margin) ||
-      !(t < crossingT(after) - margin))
+  cursor.next = next;
+  cursor.nextT = next < crossings.count ? crossingT(crossings.keys[next]) : INFINITY;
+  // Before the first crossing or after the last, the march's interval leaves the ray out.
+  cursor.inGap = next > 0 && next < crossings.count && crossingExits(crossings.keys[next - 1]) &&
+                 !crossingExits(crossings.keys[next]);
+  if (!cursor.inGap)
     return t;
-  entered = crossingFace(after);
-  return crossingT(after) - margin;
+  const float before = crossingT(crossings.keys[next - 1]);
+  if (!(t > before + margin) || !(t < cursor.nextT - margin))
+    return t;
+  entered = crossingFace(crossings.keys[next]);
+  return cursor.nextT - margin;
 }
 
 /// Whether the crossings describe the frame: the eye lies outside `meshBox` (so every ray starts outside

@@ -280,9 +280,9 @@ UVR_HOST_DEVICE inline RayResult integrateRay(const SceneView &scene, const Inte
   }
   const float s1 = settings.s1;
   // Grid points in the gaps between the ray's crossings out of the mesh and back in are passed over; the
-  // march goes on from the tet the ray re-enters by. nextCrossing follows the march along the crossings.
+  // march goes on from the tet the ray re-enters by. `crossing` follows the march along the crossings.
   const bool gaps = skip && crossings.count > 1;
-  uint32_t nextCrossing = 0;
+  CrossingCursor crossing;
   // Where the crossings are known, samples lie between them, in cells but for the margins: the occupancy
   // grid would only confirm it.
   const bool clearVoxels = crossings.keys == nullptr;
@@ -310,7 +310,7 @@ UVR_HOST_DEVICE inline RayResult integrateRay(const SceneView &scene, const Inte
     for (float t = tEnter + k * s1; t < tb; k += stride, t = tEnter + k * s1) {
       if (gaps) {
         uint32_t entered;
-        const float resume = afterGap(crossings, t, margin, nextCrossing, entered);
+        const float resume = afterGap(crossings, t, margin, crossing, entered);
         if (entered != kNoCell)
           at.enter(entered >> 2);
         if (resume > t) {
