@@ -399,9 +399,6 @@ TEST_P(Integrator, GapsBetweenBoundaryCrossingsTakeNoSample) {
   }
 }
 
-// Each pixel's crossings with the boundary faces, against every face tested in double precision: the
-// projected boxes leave out no pixel whose ray crosses a face, the crossings come in order of t, and each
-// says rightly whether the ray leaves the mesh there.
 // Along a ray that enters the mesh at t = 1, leaves at 3, enters again at 6 and leaves at 9, samples in the
 // gap move on to its end, and each call says which face the ray came back in by since the one before.
 TEST(BoundaryCrossings, AfterGapFollowsTheMarch) {
@@ -435,6 +432,9 @@ TEST(BoundaryCrossings, AfterGapFollowsTheMarch) {
   EXPECT_EQ(entered, 12u);
 }
 
+// Each pixel's crossings with the boundary faces, against every face tested in double precision: the
+// projected boxes leave out no pixel whose ray crosses a face, the crossings come in order of t, and each
+// says rightly whether the ray leaves the mesh there.
 TEST(BoundaryCrossings, FindEachRaysFirstAndLastCrossing) {
   const Mesh mesh = notchedShell();
   const MeshView view = makeMeshView(mesh, -1);

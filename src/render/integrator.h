@@ -78,10 +78,9 @@ struct RayCell {
 
 /// The tet, of those `across` the faces of a tet, that a walk towards a point with weights `w` crosses: the
 /// face the point lies furthest beyond (`beyond`); where that is the mesh's boundary and the walk follows a
-/// ray
-/// (`alongRay`), the face the ray leaves by, whose weights change by `dw` along it. A walk from a tet on the
-/// ray thus goes on around a concavity, where the point, inside the mesh, lies beyond the boundary as seen
-/// from a tet on the way; a walk from a guess gives up at once.
+/// ray (`alongRay`), the face the ray leaves by, whose weights change by `dw` along it. A walk from a tet on
+/// the ray thus goes on around a concavity, where the point, inside the mesh, lies beyond the boundary as
+/// seen from a tet on the way; a walk from a guess gives up at once.
 UVR_HOST_DEVICE inline uint32_t nextTet(Index4 across, int beyond, const float w[4], const float dw[4],
                                         bool alongRay) {
   const uint32_t next = across[beyond];
