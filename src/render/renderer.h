@@ -70,7 +70,7 @@ struct Frame {
   std::vector<uint32_t> samplesPerPixel; ///< row-major, top row first; or empty
   uint64_t samplesTotal = 0;
   uint32_t samplesMax = 0;
-  double kernelMs = 0.0; ///< the GPU's time in the render kernel alone (CUDA), without copies; 0 on the CPU
+  double kernelMs = 0.0; ///< the GPU time of the frame's kernels (CUDA), without copies; 0 on the CPU
 };
 
 class Renderer {
