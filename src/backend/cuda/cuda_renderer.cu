@@ -240,7 +240,7 @@ struct CudaRenderer::Impl {
   CubScratch scratch;
   PinnedBuffer staging;                                   // the frame's arrays on their way to the caller's
   cudaEvent_t kernelStart = nullptr, kernelEnd = nullptr; // around the frame's kernels
-  cudaEvent_t renderStart = nullptr, renderEnd = nullptr; // around the render kernel alone
+  cudaEvent_t renderStart = nullptr;                      // from there to kernelEnd, the render kernel alone
   // The skipping modes' warp shape for the current transfer function (see renderBlock): after a change, the
   // first frame loads the kernel, the second is drawn in rows and the third in tiles, both timed; later
   // frames take the faster shape.
@@ -256,8 +256,6 @@ struct CudaRenderer::Impl {
       cudaEventDestroy(kernelEnd);
     if (renderStart)
       cudaEventDestroy(renderStart);
-    if (renderEnd)
-      cudaEventDestroy(renderEnd);
     for (cudaEvent_t event : pieceCopied)
       cudaEventDestroy(event);
   }
@@ -278,7 +276,6 @@ CudaRenderer::CudaRenderer(const MeshView &mesh, uint64_t pointCount, uint32_t l
   UVR_CUDA_CHECK(cudaEventCreate(&d.kernelStart));
   UVR_CUDA_CHECK(cudaEventCreate(&d.kernelEnd));
   UVR_CUDA_CHECK(cudaEventCreate(&d.renderStart));
-  UVR_CUDA_CHECK(cudaEventCreate(&d.renderEnd));
   SceneView &scene = d.scene;
   scene.mesh = mesh;
   scene.mesh.points = d.points.upload(mesh.points, pointCount);
@@ -425,7 +422,6 @@ double CudaRenderer::render(const CameraView &camera, const IntegratorSettings &
   kernel<<<grid, block>>>(d.scene, settings, camera, device, height, crossingStart, d.crossingKeys.data(),
                           d.sampleTotals.data());
   UVR_CUDA_CHECK(cudaGetLastError());
-  UVR_CUDA_CHECK(cudaEventRecord(d.renderEnd));
   UVR_CUDA_CHECK(cudaEventRecord(d.kernelEnd));
   // The frame comes back through pinned memory, piece by piece, each copied on all cores into the caller's
   // arrays while the next crosses the bus: copies into pageable memory run at a fraction of the bus's speed.
@@ -475,7 +471,7 @@ double CudaRenderer::render(const CameraView &camera, const IntegratorSettings &
   }
   if (trial == 1 || trial == 2) {
     float renderMs = 0.f;
-    UVR_CUDA_CHECK(cudaEventElapsedTime(&renderMs, d.renderStart, d.renderEnd));
+    UVR_CUDA_CHECK(cudaEventElapsedTime(&renderMs, d.renderStart, d.kernelEnd));
     if (trial == 1)
       d.rowsMs = renderMs;
     else
