@@ -203,7 +203,11 @@ TEST(BackendsAgree, CudaComputesTheHostsPartitionMetadata) {
       EXPECT_EQ(device.maxOpacity[i], host.maxOpacity[i]) << "partition " << i;
       EXPECT_NEAR(device.sigma[i], host.sigma[i], 1e-5f) << "partition " << i;
     }
-    for (size_t i = 0; i < host.nodeMaxOpacity.size(); ++i)
+    ASSERT_EQ(device.nodeMinSigma.size(), host.nodeMinSigma.size());
+    for (size_t i = 0; i < host.nodeMaxOpacity.size(); ++i) {
       EXPECT_EQ(device.nodeMaxOpacity[i], host.nodeMaxOpacity[i]) << "node " << i;
+      EXPECT_NEAR(device.nodeMinSigma[i], host.nodeMinSigma[i], 1e-5f) << "node " << i;
+    }
+    EXPECT_EQ(host.nodeMinSigma[0], kTransparentSigma);
   }
 }

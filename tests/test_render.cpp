@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <functional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -294,6 +295,45 @@ TEST_P(Integrator, NoCracksAtPartitionBoundaries) {
       const Frame b = many.render(camera, settings);
       expectSameFrame(a, b, 1e-5f, 0);
     }
+  }
+}
+
+// Leaf by leaf, or with some inner nodes taken whole, the intervals a ray visits tile it front to back with
+// neither gaps nor overlaps, each the node's stretch of the ray: marching a node whole takes the samples its
+// leaves would.
+TEST(Partitions, TraversalTilesTheRayLeafByLeafOrWithWholeNodes) {
+  const Mesh mesh = buildMesh(makeBoxGrid(CellType::Tetra, 10, kBox, radial, 0.2f), "box");
+  const Partitions parts = buildPartitions(makeMeshView(mesh, 0), 8);
+  ASSERT_GT(parts.count(), 100u);
+  const PartitionsView view = parts.view();
+  const std::vector<std::pair<const char *, std::function<bool(uint32_t)>>> choices = {
+      {"leaves", [](uint32_t) { return false; }},
+      {"every third node", [](uint32_t node) { return node % 3 == 1; }},
+      {"the root", [](uint32_t) { return true; }}};
+  const Camera camera = obliqueCamera();
+  const CameraView rays = makeCameraView(camera, 23, 17);
+  for (const auto &[name, whole] : choices) {
+    int wholeVisits = 0;
+    for (int y = 0; y < 17; ++y)
+      for (int x = 0; x < 23; ++x) {
+        const Ray ray = rays.ray(x, y);
+        float tMin, tMax;
+        if (!intersectBox(ray, view.rootBounds, 0.f, INFINITY, tMin, tMax))
+          continue;
+        float reached = tMin;
+        traversePartitions(view, ray, tMin, tMax, nullptr, whole, [&](uint32_t node, float t0, float t1) {
+          const bool leaf = view.nodes[node].axis == KdNode::kLeaf;
+          EXPECT_TRUE(leaf || whole(node)) << name << ": node " << node;
+          wholeVisits += !leaf;
+          EXPECT_EQ(t0, reached) << name << ": pixel " << x << "," << y << ", node " << node;
+          EXPECT_LT(t0, t1);
+          reached = t1;
+          return true;
+        });
+        EXPECT_EQ(reached, tMax) << name << ": pixel " << x << "," << y;
+      }
+    if (std::string(name) != "leaves")
+      EXPECT_GT(wholeVisits, 0) << name;
   }
 }
 

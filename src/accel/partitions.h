@@ -135,15 +135,16 @@ UVR_HOST_DEVICE void forEachLeafTouching(const KdNode *nodes, const Box3f &box, 
   }
 }
 
-/// Visits the partitions that the ray [tMin, tMax] crosses, front to back, as `visit(partition, t0, t1)`
-/// with the ray's exact interval inside the leaf; stops when `visit` returns false. Neighbouring leaves share
-/// the split's t, so the intervals tile the ray with neither gaps nor overlaps. With `nodeMaxOpacity` (per
-/// node, for the current transfer function), whole subtrees that are transparent or whose cells the ray
-/// misses are skipped without visiting their leaves, and each interval is clipped to its partition's shrunk
-/// box (paper §2.2).
-template <typename Visit>
+/// Visits the partitions that the ray [tMin, tMax] crosses, front to back, as `visit(node, t0, t1)` with a
+/// leaf node and the ray's exact interval inside it; stops when `visit` returns false. Neighbouring leaves
+/// share the split's t, so the intervals tile the ray with neither gaps nor overlaps. An inner node for which
+/// `whole(node)` holds is visited as one interval instead of leaf by leaf (its partitions all drawn alike:
+/// splitting the ray at their boundaries would change nothing but the cost). With `nodeMaxOpacity` (per node,
+/// for the current transfer function), whole subtrees that are transparent or whose cells the ray misses are
+/// skipped without visiting their leaves, and each interval is clipped to its node's shrunk box (paper §2.2).
+template <typename Whole, typename Visit>
 UVR_HOST_DEVICE void traversePartitions(const PartitionsView &parts, const Ray &ray, float tMin, float tMax,
-                                        const float *nodeMaxOpacity, Visit &&visit) {
+                                        const float *nodeMaxOpacity, Whole &&whole, Visit &&visit) {
   constexpr int kStackSize = kMaxPartitionDepth;
   struct Entry {
     uint32_t node;
@@ -154,11 +155,11 @@ UVR_HOST_DEVICE void traversePartitions(const PartitionsView &parts, const Ray &
   uint32_t node = 0;
   float t0 = tMin, t1 = tMax;
   while (true) {
-    float b0 = t0, b1 = t1; // what a leaf visits: clipped to its shrunk box when culling
+    float b0 = t0, b1 = t1; // what a visit gets: clipped to the node's shrunk box when culling
     const bool culled = nodeMaxOpacity && (nodeMaxOpacity[node] <= 0.f ||
                                            !intersectBox(ray, parts.nodeBounds[node], t0, t1, b0, b1));
     const KdNode &n = parts.nodes[node];
-    if (!culled && n.axis != KdNode::kLeaf) {
+    if (!culled && n.axis != KdNode::kLeaf && !whole(node)) {
       const int axis = int(n.axis);
       const float origin = ray.origin[axis];
       const float direction = ray.direction[axis];
@@ -183,7 +184,7 @@ UVR_HOST_DEVICE void traversePartitions(const PartitionsView &parts, const Ray &
       }
       continue;
     }
-    if (!culled && b0 < b1 && !visit(n.child, b0, b1))
+    if (!culled && b0 < b1 && !visit(node, b0, b1))
       return;
     if (top == 0)
       return;

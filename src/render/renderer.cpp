@@ -138,6 +138,7 @@ SceneView Renderer::sceneView() const {
   scene.partitions = accel.partitions.view();
   const PartitionMetadata &meta = metadata();
   scene.nodeMaxOpacity = meta.nodeMaxOpacity.data();
+  scene.nodeMinSigma = meta.nodeMinSigma.data();
   scene.sigma = meta.sigma.data();
   scene.tf = tf_->view();
   return scene;

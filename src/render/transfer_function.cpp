@@ -81,6 +81,13 @@ PartitionMetadata computePartitionMetadata(const Partitions &partitions, const T
 
   for (uint32_t i = 0; i < count; ++i)
     meta.sigma[i] = normalizedSigma(variance[i], lowest, highest);
+  meta.nodeMinSigma.resize(partitions.nodes.size());
+  for (size_t node = partitions.nodes.size(); node-- > 0;) {
+    const KdNode &n = partitions.nodes[node];
+    meta.nodeMinSigma[node] = n.axis == KdNode::kLeaf
+                                  ? (meta.maxOpacity[n.child] > 0.f ? meta.sigma[n.child] : kTransparentSigma)
+                                  : std::min(meta.nodeMinSigma[n.child], meta.nodeMinSigma[n.child + 1]);
+  }
   return meta;
 }
 

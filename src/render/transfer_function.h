@@ -107,12 +107,18 @@ private:
   std::vector<float> opacityMax_;                 ///< levels of size() entries each, unused tails zero
 };
 
+/// nodeMinSigma's mark for a node with a transparent partition below.
+constexpr float kTransparentSigma = -1.f;
+
 /// What space skipping and adaptive sampling read per partition; recomputed on every transfer-function change
 /// in time linear in table entries and partitions, independent of the cell count.
 struct PartitionMetadata {
   std::vector<float> maxOpacity;
   std::vector<float> nodeMaxOpacity; ///< per KD node, the maximum over the partitions below
   std::vector<float> sigma;          ///< colour standard deviation, normalised over all partitions to [0, 1]
+  /// Per KD node, the smallest sigma of the partitions below, or -1 where one of them is transparent: where
+  /// it asks for the finest step, the integrator marches the node's partitions as one (traversePartitions).
+  std::vector<float> nodeMinSigma;
   uint32_t transparentCount = 0;
 };
 

@@ -179,11 +179,26 @@ __global__ void partitionMetadataKernel(TransferFunctionRangeView tf, Partitions
   }
 }
 
-__global__ void normalizeSigmaKernel(uint32_t count, const MetadataTotals *totals, float *sigma) {
+/// Per partition, its sigma from the variance in `sigma`, lowered into the nodes above it as their
+/// nodeMinSigma (set above any sigma beforehand). Sigmas and kTransparentSigma order as their bits do as
+/// signed integers, which lets integer atomics take their minimum.
+__global__ void normalizeSigmaKernel(uint32_t count, const MetadataTotals *totals, const uint32_t *parents,
+                                     const uint32_t *partitionNodes, const float *nodeMaxOpacity,
+                                     float *sigma, float *nodeMinSigma) {
   const uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
-  if (i < count)
-    sigma[i] = normalizedSigma(sigma[i], __uint_as_float(totals->lowestVariance),
-                               __uint_as_float(totals->highestVariance));
+  if (i >= count)
+    return;
+  sigma[i] = normalizedSigma(sigma[i], __uint_as_float(totals->lowestVariance),
+                             __uint_as_float(totals->highestVariance));
+  uint32_t node = partitionNodes[i];
+  const float lowest = nodeMaxOpacity[node] > 0.f ? sigma[i] : kTransparentSigma;
+  nodeMinSigma[node] = lowest;
+  const int bits = __float_as_int(lowest);
+  while (node != 0) {
+    node = parents[node];
+    if (atomicMin(reinterpret_cast<int *>(nodeMinSigma + node), bits) <= bits)
+      break;
+  }
 }
 
 } // namespace
@@ -224,7 +239,7 @@ struct CudaRenderer::Impl {
   SceneView scene; // device pointers
   DeviceBuffer<Vec3f> points;
   DeviceBuffer<uint32_t> tets, pyramids, wedges, hexes;
-  DeviceBuffer<float> values, nodeMaxOpacity, sigma;
+  DeviceBuffer<float> values, nodeMaxOpacity, nodeMinSigma, sigma;
   DeviceAcceleration accel;
   double buildMs = 0.0;
   DeviceBuffer<uint32_t> kdParents, partitionNodes;
@@ -305,9 +320,11 @@ CudaRenderer::CudaRenderer(const MeshView &mesh, uint64_t pointCount, uint32_t l
   UVR_CUDA_CHECK(cudaGetLastError());
   d.sigma.resize(partitionCount);
   d.nodeMaxOpacity.resize(nodeCount);
+  d.nodeMinSigma.resize(nodeCount);
   d.totals.resize(1);
   scene.sigma = d.sigma.data();
   scene.nodeMaxOpacity = d.nodeMaxOpacity.data();
+  scene.nodeMinSigma = d.nodeMinSigma.data();
   UVR_CUDA_CHECK(cudaDeviceSynchronize());
 }
 
@@ -331,8 +348,10 @@ uint32_t CudaRenderer::setTransferFunction(const TransferFunction &tf) {
       ranges, d.scene.partitions, d.kdParents.data(), d.partitionNodes.data(), d.sigma.data(),
       d.nodeMaxOpacity.data(), d.totals.data());
   UVR_CUDA_CHECK(cudaGetLastError());
-  normalizeSigmaKernel<<<blocksFor(count, kMetadataBlock), kMetadataBlock>>>(count, d.totals.data(),
-                                                                             d.sigma.data());
+  UVR_CUDA_CHECK(cudaMemset(d.nodeMinSigma.data(), 0x7f, d.nodeMinSigma.bytes())); // 3.4e38, above any sigma
+  normalizeSigmaKernel<<<blocksFor(count, kMetadataBlock), kMetadataBlock>>>(
+      count, d.totals.data(), d.kdParents.data(), d.partitionNodes.data(), d.nodeMaxOpacity.data(),
+      d.sigma.data(), d.nodeMinSigma.data());
   UVR_CUDA_CHECK(cudaGetLastError());
   MetadataTotals totals{};
   d.totals.download(&totals, 1); // waits for the kernels; a fault surfaces here
@@ -345,8 +364,10 @@ PartitionMetadata CudaRenderer::metadata() const {
   const uint32_t count = d.scene.partitions.count;
   meta.sigma.resize(count);
   meta.nodeMaxOpacity.resize(d.nodeMaxOpacity.bytes() / sizeof(float));
+  meta.nodeMinSigma.resize(meta.nodeMaxOpacity.size());
   d.sigma.download(meta.sigma.data(), count);
   d.nodeMaxOpacity.download(meta.nodeMaxOpacity.data(), meta.nodeMaxOpacity.size());
+  d.nodeMinSigma.download(meta.nodeMinSigma.data(), meta.nodeMinSigma.size());
   // A partition's maximum is its leaf node's.
   std::vector<uint32_t> leafNodes(count);
   d.partitionNodes.download(leafNodes.data(), count);
@@ -491,9 +512,9 @@ size_t CudaRenderer::memoryBytes() const {
 size_t CudaRenderer::sceneBytes() const {
   const Impl &d = *impl_;
   return d.points.bytes() + d.tets.bytes() + d.pyramids.bytes() + d.wedges.bytes() + d.hexes.bytes() +
-         d.values.bytes() + d.accel.bytes() + d.nodeMaxOpacity.bytes() + d.sigma.bytes() +
-         d.kdParents.bytes() + d.partitionNodes.bytes() + d.totals.bytes() + d.tfTable.bytes() +
-         d.tfPrefixSum.bytes() + d.tfPrefixSquares.bytes() + d.tfOpacityMax.bytes();
+         d.values.bytes() + d.accel.bytes() + d.nodeMaxOpacity.bytes() + d.nodeMinSigma.bytes() +
+         d.sigma.bytes() + d.kdParents.bytes() + d.partitionNodes.bytes() + d.totals.bytes() +
+         d.tfTable.bytes() + d.tfPrefixSum.bytes() + d.tfPrefixSquares.bytes() + d.tfOpacityMax.bytes();
 }
 
 uint32_t CudaRenderer::partitionCount() const { return impl_->scene.partitions.count; }
