@@ -577,6 +577,24 @@ TEST(TransferFunction, MetadataMatchesAScanOfTheTable) {
 
 // ParaView's reset camera: the bounding sphere touches the narrower of the two view angles and fits the
 // other.
+// Above finestStepSigma the paper's step rounds to one fixed step, below it to more: the integrator may march
+// partitions above it at s1 without computing their steps, and subtrees of them whole.
+TEST(TransferFunction, FinestStepSigmaIsWhereStepsRoundToOneFixedStep) {
+  for (const auto &[s1, s2, p] :
+       {std::array<float, 3>{0.01f, 0.08f, 4.f}, {0.5f, 0.9f, 1.f}, {1.f, 3.f, 2.f}, {0.02f, 0.05f, 7.5f}}) {
+    const float threshold = finestStepSigma(s1, s2, p);
+    ASSERT_GT(threshold, 0.f);
+    ASSERT_LT(threshold, 1.f);
+    for (float sigma = 0.f; sigma <= 1.f; sigma += 1.f / 512.f) {
+      if (std::fabs(sigma - threshold) < 1e-4f)
+        continue;
+      const float steps = std::rint(adaptiveStepSize(s1, s2, p, sigma) / s1);
+      EXPECT_EQ(steps <= 1.f, sigma > threshold) << "s2 " << s2 << ", p " << p << ", sigma " << sigma;
+    }
+  }
+  EXPECT_EQ(finestStepSigma(0.1f, 0.1f, 2.f), -INFINITY);
+}
+
 TEST(Camera, ResetCameraFitsTheBoundingSphereInBothAngles) {
   const Box3f box{{-1.f, -2.f, 0.f}, {3.f, 1.f, 5.f}};
   const float radius = 0.5f * length(box.size());

@@ -235,14 +235,16 @@ void Renderer::render(const Camera &camera, const RenderSettings &settings, Fram
   target.width = settings.width;
   target.background = settings.background;
   const CameraView view = makeCameraView(camera, settings.width, settings.height);
+  RenderSettings derived = settings;
+  derived.integrator.finestStepSigma = finestStepSigma(s.s1, s.s2, s.p);
   SampleTotals samples;
   if (settings.backend == Backend::Cuda) {
     prepare(Backend::Cuda);
 #ifdef UVR_HAVE_CUDA
-    frame.kernelMs = cuda_->render(view, settings.integrator, target, settings.height, samples);
+    frame.kernelMs = cuda_->render(view, derived.integrator, target, settings.height, samples);
 #endif
   } else {
-    samples = renderCpu(sceneView(), host().boundaryFaceList, view, settings, target);
+    samples = renderCpu(sceneView(), host().boundaryFaceList, view, derived, target);
   }
   frame.samplesTotal = samples.total;
   frame.samplesMax = samples.max;
