@@ -51,7 +51,7 @@ void addRenderOptions(CLI::App *cmd, RenderOptions &o) {
   cmd->add_option("--p", o.p, "Adaptive power, >= 1 (default: 4)");
   cmd->add_option("--unit", o.unit, "Opacity unit distance (default: the default s1)");
   cmd->add_option("--leaf-size", o.leafSize,
-                  "Most cells per partition (default: the cell count / 512, at least 64)");
+                  "Most cells per partition (default: the cell count / 256, at least 64)");
   cmd->add_option("--size", o.size, "Image size WxH")->capture_default_str();
   cmd->add_option("--eye", o.eye, "Camera position X,Y,Z (default: framing the mesh from +z)");
   cmd->add_option("--at", o.at, "Focal point X,Y,Z (default: the centre of the mesh bounds)");

@@ -52,7 +52,7 @@ Partitions buildPartitions(const MeshView &mesh, uint32_t leafSize);
 /// backends (README, "Choosing defaults"): a partition costs more than a few samples (its traversal; on a
 /// GPU a warp waits for its slowest ray's), and much fewer partitions leave the colour variance too coarse
 /// for the step sizes.
-constexpr uint64_t kDefaultPartitions = 512;
+constexpr uint64_t kDefaultPartitions = 256;
 constexpr uint32_t kSmallestDefaultLeafSize = 64;
 
 /// The default leaf size for a mesh of `cells` cells.
