@@ -40,8 +40,8 @@ struct IntegratorSettings {
   float unit = 1.f;                 ///< opacity unit distance
   float terminationOpacity = 0.99f; ///< early ray termination
   /// Derived from s1, s2 and p by Renderer::render (finestStepSigma): partitions of greater sigma take step
-  /// s1 outright, and subtrees of such partitions are marched whole. The default decides each partition by
-  /// its step.
+  /// s1 outright, and subtrees of such partitions are marched whole. The default, +inf, computes every
+  /// partition's step and, when sampling adaptively, marches every partition alone.
   float finestStepSigma = INFINITY;
 };
 
@@ -290,9 +290,6 @@ UVR_HOST_DEVICE inline RayResult integrateRay(const SceneView &scene, const Inte
   // Where the crossings are known, samples lie between them, in cells but for the margins: the occupancy
   // grid would only confirm it.
   const bool clearVoxels = crossings.keys == nullptr;
-  // Adaptive steps as whole fixed steps: every sample is one of reference's, and at the default unit the
-  // opacity needs no correction for most of them.
-  auto fixedSteps = [&](float step) { return maxf(1.f, rintf(step / s1)); };
   // The index of the first grid point at or after t.
   auto gridIndex = [&](float t) {
     float k = ceilf((t - tEnter) / s1);
@@ -307,7 +304,9 @@ UVR_HOST_DEVICE inline RayResult integrateRay(const SceneView &scene, const Inte
     // point where the next interval's samples begin, so that intervals marched with longer steps neither
     // overlap nor leave gaps at partition boundaries (with step s1 nothing changes).
     const float kEnd = gridIndex(tb);
-    const float stride = fixedSteps(step);
+    // Whole fixed steps: every sample is one of reference's, and at the default unit the opacity needs no
+    // correction for most of them.
+    const float stride = maxf(1.f, rintf(step / s1));
     // A longer step crosses proportionally more tets; past a seed voxel, the seed lies nearer than the
     // previous sample.
     const int walkSteps = 8 * int(stride);
@@ -368,11 +367,11 @@ UVR_HOST_DEVICE inline RayResult integrateRay(const SceneView &scene, const Inte
   };
   traversePartitions(
       scene.partitions, ray, tStart, tStop, cull, whole, [&](uint32_t node, float t0, float t1) {
+        // A whole node's partitions all take step s1.
         const KdNode &n = scene.partitions.nodes[node];
-        const float step = n.axis != KdNode::kLeaf || fine(scene.sigma[n.child]) // a whole node's take s1
-                               ? s1
-                               : adaptiveStepSize(s1, settings.s2, settings.p, scene.sigma[n.child]);
-        return march(t0, t1, step);
+        const bool fixed = n.axis != KdNode::kLeaf || fine(scene.sigma[n.child]);
+        return march(t0, t1,
+                     fixed ? s1 : adaptiveStepSize(s1, settings.s2, settings.p, scene.sigma[n.child]));
       });
   return result;
 }
