@@ -71,22 +71,20 @@ PartitionMetadata computePartitionMetadata(const Partitions &partitions, const T
       ++meta.transparentCount;
     }
   }
-  meta.nodeMaxOpacity.resize(partitions.nodes.size());
-  for (size_t node = partitions.nodes.size(); node-- > 0;) { // children follow their parents
-    const KdNode &n = partitions.nodes[node];
-    meta.nodeMaxOpacity[node] =
-        n.axis == KdNode::kLeaf ? meta.maxOpacity[n.child]
-                                : std::max(meta.nodeMaxOpacity[n.child], meta.nodeMaxOpacity[n.child + 1]);
-  }
-
   for (uint32_t i = 0; i < count; ++i)
     meta.sigma[i] = normalizedSigma(variance[i], lowest, highest);
+
+  meta.nodeMaxOpacity.resize(partitions.nodes.size());
   meta.nodeMinSigma.resize(partitions.nodes.size());
-  for (size_t node = partitions.nodes.size(); node-- > 0;) {
+  for (size_t node = partitions.nodes.size(); node-- > 0;) { // children follow their parents
     const KdNode &n = partitions.nodes[node];
-    meta.nodeMinSigma[node] = n.axis == KdNode::kLeaf
-                                  ? (meta.maxOpacity[n.child] > 0.f ? meta.sigma[n.child] : kTransparentSigma)
-                                  : std::min(meta.nodeMinSigma[n.child], meta.nodeMinSigma[n.child + 1]);
+    if (n.axis == KdNode::kLeaf) {
+      meta.nodeMaxOpacity[node] = meta.maxOpacity[n.child];
+      meta.nodeMinSigma[node] = meta.maxOpacity[n.child] > 0.f ? meta.sigma[n.child] : kTransparentSigma;
+    } else {
+      meta.nodeMaxOpacity[node] = std::max(meta.nodeMaxOpacity[n.child], meta.nodeMaxOpacity[n.child + 1]);
+      meta.nodeMinSigma[node] = std::min(meta.nodeMinSigma[n.child], meta.nodeMinSigma[n.child + 1]);
+    }
   }
   return meta;
 }
