@@ -95,6 +95,53 @@ TEST(WalkTets, CarriedWeightsGiveTheCellsOwnValues) {
   }
 }
 
+// A guess at a sample's tet (the neighbouring ray's, see CellTrail) changes only where the walk starts: near
+// or far, each sample is located in a tet holding it, with the value that tet interpolates there, as without
+// a guess; and the weights carried on to the next sample are the ray's own.
+TEST(WalkTets, GuessesChangeOnlyWhereTheWalkStarts) {
+  const Mesh mesh =
+      buildMesh(makeBoxGrid(
+                    CellType::Tetra, 5, kCube, [](Vec3f p) { return p.x * p.y + p.z; }, 0.3f, 11),
+                "box");
+  const std::vector<uint32_t> neighbors = buildTetNeighbors(mesh);
+  for (const bool records : {false, true}) {
+    SCOPED_TRACE(records ? "affine records" : "corners");
+    SceneView scene;
+    scene.mesh = makeMeshView(mesh, 0);
+    scene.tetNeighbors = neighbors.data();
+    const std::vector<TetAffine> affine = records ? buildTetAffine(scene.mesh) : std::vector<TetAffine>{};
+    scene.tetAffine = records ? affine.data() : nullptr;
+    std::mt19937 random(5);
+    std::uniform_int_distribution<uint32_t> anyTet(0, scene.mesh.tetCount - 1);
+    int fromGuess = 0, samples = 0;
+    for (int r = 0; r < 100; ++r) {
+      const auto [origin, ray, tExit] = randomRayInCube(random);
+      RayCell plain, guessed;
+      plain.cell = guessed.cell = cellHolding(scene.mesh, origin);
+      ASSERT_NE(plain.cell, kNoCell);
+      for (float t = 0.f; t < tExit; t += 0.13f, ++samples) {
+        const Vec3f p = ray.at(t);
+        // The tet of a point a little off the ray, as a neighbouring ray's; or any tet at all.
+        const uint32_t guess =
+            samples % 2 ? cellHolding(scene.mesh, p + Vec3f{0.02f, -0.01f, 0.015f}) : anyTet(random);
+        const uint32_t before = guessed.cell;
+        float withoutGuess, withGuess;
+        ASSERT_TRUE(locateSample(scene, true, false, ray, t, 64, false, kNoCell, plain, withoutGuess));
+        ASSERT_TRUE(locateSample(scene, true, false, ray, t, 64, false, guess, guessed, withGuess))
+            << "ray " << r << " t " << t;
+        ASSERT_TRUE(cellContains(scene.mesh, guessed.cell, p));
+        float expected;
+        ASSERT_TRUE(sampleCell(scene.mesh, guessed.cell, p, expected));
+        EXPECT_NEAR(withGuess, expected, 1e-5f);
+        EXPECT_NEAR(withGuess, withoutGuess, 1e-5f);
+        fromGuess += guessed.cell != before && guessed.cell == guess;
+      }
+    }
+    // The walk from a guess is exercised: many samples that left the previous sample's tet lie in the guess.
+    EXPECT_GT(fromGuess, samples / 10);
+  }
+}
+
 // The face a ray leaves a tet by, named from the weights of a point beyond the tet, is the face whose
 // triangle the ray crosses, found by intersecting the ray with each face; and where that face's neighbour is
 // the boundary, a walk along the ray goes on across it rather than across the face the point lies furthest

@@ -79,6 +79,26 @@ struct RayCell {
     onRay = true;
     affine = false;
   }
+  /// Where `affine`: the weights at `t` along the ray in `cell`, and the face the point there lies furthest
+  /// beyond (see smallestWeight), with its weight in `lowest`.
+  UVR_HOST_DEVICE int weightsAt(float at, float weights[4], float &lowest) const {
+    const float s = at - t;
+    for (int i = 0; i < 4; ++i)
+      weights[i] = w[i] + s * dw[i];
+    return smallestWeight(weights, lowest);
+  }
+  UVR_HOST_DEVICE float valueAt(float at) const { return value + (at - t) * dvalue; }
+};
+
+/// The cells in which a CPU thread's previous ray found its samples, by grid index (see integrateRay). The
+/// ray of a neighbouring pixel passes a fraction of a cell away, so its cell at the same index is most often
+/// the sample's own or next to it: a walk of one or two tets, where the ray's previous sample lies about two
+/// tets back. Each ray reads an entry and then writes its own there, so one buffer serves a thread's rays
+/// in turn (pixels in serpentine order), and an entry left by an older ray is only a worse guess. The GPU
+/// runs neighbouring rays at once and passes none.
+struct CellTrail {
+  uint32_t *cells = nullptr; ///< kNoCell where the ray found no tet
+  uint32_t size = 0;
 };
 
 /// The tet, of those `across` the faces of a tet, that a walk towards a point with weights `w` crosses: the
@@ -104,13 +124,10 @@ UVR_HOST_DEVICE inline bool walkTets(const SceneView &scene, const Ray &ray, flo
   float w[4];
   if (at.affine && at.cell == start) {
     const Index4 across = Index4::load(scene.tetNeighbors + 4 * uint64_t(current));
-    const float s = t - at.t;
-    for (int i = 0; i < 4; ++i)
-      w[i] = at.w[i] + s * at.dw[i];
     float lowest;
-    const int exit = smallestWeight(w, lowest);
+    const int exit = at.weightsAt(t, w, lowest);
     if (lowest >= -kInsideTolerance) {
-      value = at.value + s * at.dvalue;
+      value = at.valueAt(t);
       return true;
     }
     current = nextTet(across, exit, w, at.dw, alongRay);
@@ -197,7 +214,9 @@ UVR_HOST_DEVICE inline bool walkCells(const SceneView &scene, const Ray &ray, fl
   return false;
 }
 
-/// Finds the cell holding the sample at `t` on `ray` and returns the field there. The walk starts from `at`
+/// Finds the cell holding the sample at `t` on `ray` and returns the field there. Where `guess` (the
+/// neighbouring ray's tet for this sample, see CellTrail) is a tet other than `at`'s and the sample is not
+/// in `at`'s, a short walk from `guess` comes first. Else the walk starts from `at`
 /// (the previous sample's cell), or, where the sample lies `far` from it (a step longer than a seed voxel) or
 /// there is none, from the seed of the sample's voxel. `walkSteps` bounds a walk from `at`: about 8 per fixed
 /// step, since samples lie a cell or two apart. With `skipEmpty`, points in empty space are rejected without
@@ -207,11 +226,24 @@ UVR_HOST_DEVICE inline bool walkCells(const SceneView &scene, const Ray &ray, fl
 /// divergent query on a GPU, is left for what neither walk finds. Without `skipEmpty` a failed walk goes to
 /// the BVH, as in a plain ray marcher.
 UVR_HOST_DEVICE inline bool locateSample(const SceneView &scene, bool skipEmpty, bool clearVoxels,
-                                         const Ray &ray, float t, int walkSteps, bool far, RayCell &at,
-                                         float &value) {
+                                         const Ray &ray, float t, int walkSteps, bool far, uint32_t guess,
+                                         RayCell &at, float &value) {
   const Vec3f p = ray.at(t);
   if (skipEmpty && clearVoxels && !scene.occupancy.mayHoldCell(p))
     return false;
+  if (guess != kNoCell && guess != at.cell && scene.tetNeighbors) {
+    if (at.affine) { // the ray's own tet first: a test without loads
+      float w[4], lowest;
+      at.weightsAt(t, w, lowest);
+      if (lowest >= -kInsideTolerance) {
+        value = at.valueAt(t);
+        return true;
+      }
+    }
+    // Four tets: most walks from a guess take one or two, and one that fails falls back on the ray's own.
+    if (walkTets(scene, ray, t, guess, false, 4, at, value))
+      return true;
+  }
   // A walk from `start`; a cell other than a tet is tested alone.
   auto locateFrom = [&](uint32_t start, int steps) {
     if (scene.tetNeighbors && start < scene.mesh.tetCount)
@@ -254,11 +286,12 @@ struct RayResult {
 /// march starts at its first grid point, so every sample is one that `reference` takes: skipping alone
 /// changes no sample that contributes, and a step of s1 reproduces the fixed-step samples exactly. `hint` is
 /// a cell near the ray's first sample (the neighbouring pixel's: rays are coherent), or kNoCell; it is
-/// updated to this ray's first cell. The skipping modes march only between the ray's first and last boundary
+/// updated to this ray's first cell. `trail` holds the previous ray's tets by grid index k, and takes this
+/// ray's. The skipping modes march only between the ray's first and last boundary
 /// crossings, and not through the gaps between them that lie outside the mesh, where `crossings` knows them.
 UVR_HOST_DEVICE inline RayResult integrateRay(const SceneView &scene, const IntegratorSettings &settings,
                                               const Ray &ray, uint32_t &hint,
-                                              const BoundaryCrossings &crossings) {
+                                              const BoundaryCrossings &crossings, CellTrail trail = {}) {
   RayResult result;
   float tEnter, tExit;
   if (!intersectBox(ray, scene.partitions.rootBounds, 0.f, INFINITY, tEnter, tExit))
@@ -326,7 +359,13 @@ UVR_HOST_DEVICE inline RayResult integrateRay(const SceneView &scene, const Inte
       }
       ++result.samples;
       float value;
-      if (!locateSample(scene, skip, clearVoxels, ray, t, walkSteps, far, at, value))
+      const uint32_t index = uint32_t(k);
+      const bool trailed = index < trail.size;
+      const bool located = locateSample(scene, skip, clearVoxels, ray, t, walkSteps, far,
+                                        trailed ? trail.cells[index] : kNoCell, at, value);
+      if (trailed)
+        trail.cells[index] = located && at.cell < scene.mesh.tetCount ? at.cell : kNoCell;
+      if (!located)
         continue;
       if (first) {
         hint = at.cell;
