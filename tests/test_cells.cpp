@@ -91,16 +91,15 @@ TEST(TetAffine, AgreesWithTheCorners) {
       const Vec3f direction{u(random), u(random), u(random)};
       float w[4], dw[4], expected[4], expectedChange[4];
       ASSERT_TRUE(tetBarycentricsAlong(c[0], c[1], c[2], c[3], p, direction, expected, expectedChange));
-      ASSERT_TRUE(records[0].weightsAlong(p, direction, w, dw));
+      float value, slope;
+      ASSERT_TRUE(records[0].along(p, direction, w, dw, value, slope));
       for (int k = 0; k < 4; ++k) {
         EXPECT_NEAR(w[k], expected[k], 1e-5f);
         EXPECT_NEAR(dw[k], expectedChange[k], 1e-5f);
       }
-      float value, slope;
-      records[0].valueAlong(p, direction, value, slope);
       EXPECT_NEAR(value, linear(p - offset), 1e-4f);
       EXPECT_NEAR(slope, linear(direction) - linear({}), 1e-4f);
-      EXPECT_FALSE(records[1].weightsAlong(p, direction, w, dw));
+      EXPECT_FALSE(records[1].along(p, direction, w, dw, value, slope));
     }
   }
 }

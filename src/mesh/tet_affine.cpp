@@ -18,20 +18,23 @@ std::vector<TetAffine> buildTetAffine(const MeshView &mesh) {
           const Vec3f g1 = cross(e2, e3), g2 = cross(e3, e1), g3 = cross(e1, e2);
           const float volume = dot(e1, g1);
           const float inverse = volume != 0.f ? 1.f / volume : NAN;
+          Vec3f weightGradient[3] = {g1 * inverse, g2 * inverse, g3 * inverse}, valueGradient{};
           TetAffine &record = records[t];
           record.corner = a;
-          record.weightGradient[0] = g1 * inverse;
-          record.weightGradient[1] = g2 * inverse;
-          record.weightGradient[2] = g3 * inverse;
           if (mesh.cellCentered) {
             record.valueAtCorner = mesh.values[t];
-            record.valueGradient = {};
           } else {
             const float f0 = mesh.values[v[0]];
             record.valueAtCorner = f0;
-            record.valueGradient = record.weightGradient[0] * (mesh.values[v[1]] - f0) +
-                                   record.weightGradient[1] * (mesh.values[v[2]] - f0) +
-                                   record.weightGradient[2] * (mesh.values[v[3]] - f0);
+            valueGradient = weightGradient[0] * (mesh.values[v[1]] - f0) +
+                            weightGradient[1] * (mesh.values[v[2]] - f0) +
+                            weightGradient[2] * (mesh.values[v[3]] - f0);
+          }
+          for (int i = 0; i < 4; ++i) {
+            const Vec3f g = i < 3 ? weightGradient[i] : valueGradient;
+            record.gradientX[i] = g.x;
+            record.gradientY[i] = g.y;
+            record.gradientZ[i] = g.z;
           }
         }
       });

@@ -150,20 +150,18 @@ UVR_HOST_DEVICE inline bool walkTets(const SceneView &scene, const Ray &ray, flo
           __builtin_prefetch(scene.tetAffine + across[i]);
     }
 #endif
-    float dw[4];
-    if (affine ? !affine->weightsAlong(p, ray.direction, w, dw)
+    float dw[4], slope = 0.f;
+    if (affine ? !affine->along(p, ray.direction, w, dw, value, slope)
                : !tetBarycentricsAlong(mesh.points[v.x], mesh.points[v.y], mesh.points[v.z], mesh.points[v.w],
                                        p, ray.direction, w, dw))
       return false;
     float lowest;
     const int exit = smallestWeight(w, lowest);
     if (lowest >= -kInsideTolerance) {
-      float slope = 0.f;
-      if (affine) {
-        affine->valueAlong(p, ray.direction, value, slope);
-      } else if (mesh.cellCentered) {
+      // A record gave the value and its slope with the weights.
+      if (!affine && mesh.cellCentered) {
         value = mesh.values[current];
-      } else {
+      } else if (!affine) {
         const float v0 = mesh.values[v.x], v1 = mesh.values[v.y], v2 = mesh.values[v.z],
                     v3 = mesh.values[v.w];
         value = w[0] * v0 + w[1] * v1 + w[2] * v2 + w[3] * v3;
