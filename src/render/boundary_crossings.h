@@ -27,6 +27,9 @@ struct BoundaryCrossings {
   uint32_t face = kNoCell;                  ///< 4 * tet + i
   const uint64_t *keys = nullptr;
   uint32_t count = 0;
+
+  /// Whether the ray is known to cross no face: it misses the mesh.
+  UVR_HOST_DEVICE bool none() const { return first == INFINITY; }
 };
 
 UVR_HOST_DEVICE inline uint32_t floatBits(float f) {

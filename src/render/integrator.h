@@ -306,7 +306,7 @@ UVR_HOST_DEVICE inline RayResult integrateRay(const SceneView &scene, const Inte
   // a cell.
   const float margin = 0.01f * settings.s1;
   if (skip) {
-    if (crossings.first == INFINITY)
+    if (crossings.none())
       return result;
     tStart = maxf(tEnter, crossings.first - margin);
     tStop = minf(tExit, crossings.last + margin);

@@ -41,8 +41,11 @@ SampleTotals renderCpu(const SceneView &scene, std::span<const uint32_t> boundar
                           const BoundaryCrossings along =
                               crossings ? pixelCrossings(crossingStart.data(), crossingKeys.data(), pixel)
                                         : BoundaryCrossings{};
-                          const RayResult result = integrateRay(scene, settings.integrator, camera.ray(x, y),
-                                                                hint, along, {trail.data(), trailSize});
+                          // A ray that crosses no boundary face is done before it is made.
+                          const RayResult result =
+                              along.none() ? RayResult{}
+                                           : integrateRay(scene, settings.integrator, camera.ray(x, y), hint,
+                                                          along, {trail.data(), trailSize});
                           target.store(x, y, result);
                           tileSamples.total += result.samples;
                           tileSamples.max = std::max(tileSamples.max, result.samples);
