@@ -144,8 +144,7 @@ UVR_HOST_DEVICE void forEachPixelCrossing(const MeshView &mesh, uint32_t face, c
     const float u = dot(d, camera.right) * rightScale / depth, v = dot(d, camera.up) * upScale / depth;
     const float x = 0.5f * (u + 1.f) * float(camera.width) - 0.5f,
                 y = 0.5f * (1.f - v) * float(camera.height) - 0.5f;
-    // Comparisons that drop a NaN first argument, as fminf and fmaxf do, without their library calls (a
-    // third of this function's time on the host).
+    // Comparisons that drop a NaN first argument, as fminf and fmaxf do, without their library calls.
     xLow = minf(x, xLow), xHigh = maxf(x, xHigh), yLow = minf(y, yLow), yHigh = maxf(y, yHigh);
   }
   constexpr float kMargin = 0.05f;

@@ -79,15 +79,16 @@ struct RayCell {
     onRay = true;
     affine = false;
   }
-  /// Where `affine`: the weights at `t` along the ray in `cell`, and the face the point there lies furthest
+  /// Where `affine`: the weights in `cell` of the point at `tNext` on the ray, and the face it lies furthest
   /// beyond (see smallestWeight), with its weight in `lowest`.
-  UVR_HOST_DEVICE int weightsAt(float at, float weights[4], float &lowest) const {
-    const float s = at - t;
+  UVR_HOST_DEVICE int weightsAt(float tNext, float weights[4], float &lowest) const {
+    const float s = tNext - t;
     for (int i = 0; i < 4; ++i)
       weights[i] = w[i] + s * dw[i];
     return smallestWeight(weights, lowest);
   }
-  UVR_HOST_DEVICE float valueAt(float at) const { return value + (at - t) * dvalue; }
+  /// Where `affine`: the field at `tNext` on the ray, as `cell` interpolates it.
+  UVR_HOST_DEVICE float valueAt(float tNext) const { return value + (tNext - t) * dvalue; }
 };
 
 /// The cells in which a CPU thread's previous ray found its samples, by grid index (see integrateRay). The
@@ -214,9 +215,9 @@ UVR_HOST_DEVICE inline bool walkCells(const SceneView &scene, const Ray &ray, fl
 
 /// Finds the cell holding the sample at `t` on `ray` and returns the field there. Where `guess` (the
 /// neighbouring ray's tet for this sample, see CellTrail) is a tet other than `at`'s and the sample is not
-/// in `at`'s, a short walk from `guess` comes first. Else the walk starts from `at`
-/// (the previous sample's cell), or, where the sample lies `far` from it (a step longer than a seed voxel) or
-/// there is none, from the seed of the sample's voxel. `walkSteps` bounds a walk from `at`: about 8 per fixed
+/// in `at`'s, a short walk from `guess` comes first. Else the walk starts from `at` (the previous sample's
+/// cell), or, where the sample lies `far` from it (a step longer than a seed voxel) or there is none, from
+/// the seed of the sample's voxel. `walkSteps` bounds a walk from `at`: about 8 per fixed
 /// step, since samples lie a cell or two apart. With `skipEmpty`, points in empty space are rejected without
 /// the BVH: with `clearVoxels` too by the occupancy grid at once, or where the walk fails, by the boundary
 /// faces' parity; and a point the parity leaves inside (the walk left the mesh through a concavity, or ran
@@ -285,8 +286,8 @@ struct RayResult {
 /// changes no sample that contributes, and a step of s1 reproduces the fixed-step samples exactly. `hint` is
 /// a cell near the ray's first sample (the neighbouring pixel's: rays are coherent), or kNoCell; it is
 /// updated to this ray's first cell. `trail` holds the previous ray's tets by grid index k, and takes this
-/// ray's. The skipping modes march only between the ray's first and last boundary
-/// crossings, and not through the gaps between them that lie outside the mesh, where `crossings` knows them.
+/// ray's. The skipping modes march only between the ray's first and last boundary crossings, and not through
+/// the gaps between them that lie outside the mesh, where `crossings` knows them.
 UVR_HOST_DEVICE inline RayResult integrateRay(const SceneView &scene, const IntegratorSettings &settings,
                                               const Ray &ray, uint32_t &hint,
                                               const BoundaryCrossings &crossings, CellTrail trail = {}) {
