@@ -25,7 +25,7 @@ SampleTotals renderCpu(const SceneView &scene, std::span<const uint32_t> boundar
   // A trail entry per grid point along the longest ray through the mesh bounds, within reason.
   const Box3f &bounds = scene.partitions.rootBounds;
   const float gridPoints = length(bounds.upper - bounds.lower) / settings.integrator.s1 + 2.f;
-  const uint32_t trailSize = scene.tetAffine ? uint32_t(minf(gridPoints, float(1 << 20))) : 0;
+  const uint32_t trailSize = scene.tetNeighbors ? uint32_t(minf(gridPoints, float(1 << 20))) : 0;
   tbb::parallel_for(tbb::blocked_range2d<int>(0, settings.height, kTile, 0, settings.width, kTile),
                     [&](const tbb::blocked_range2d<int> &tile) {
                       uint32_t hint = kNoCell;
