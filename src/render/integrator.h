@@ -159,14 +159,15 @@ UVR_HOST_DEVICE inline bool walkTets(const SceneView &scene, const Ray &ray, flo
     float lowest;
     const int exit = smallestWeight(w, lowest);
     if (lowest >= -kInsideTolerance) {
-      // A record gave the value and its slope with the weights.
-      if (!affine && mesh.cellCentered) {
-        value = mesh.values[current];
-      } else if (!affine) {
-        const float v0 = mesh.values[v.x], v1 = mesh.values[v.y], v2 = mesh.values[v.z],
-                    v3 = mesh.values[v.w];
-        value = w[0] * v0 + w[1] * v1 + w[2] * v2 + w[3] * v3;
-        slope = dw[0] * v0 + dw[1] * v1 + dw[2] * v2 + dw[3] * v3;
+      if (!affine) { // else the record gave the value and its slope with the weights
+        if (mesh.cellCentered) {
+          value = mesh.values[current];
+        } else {
+          const float v0 = mesh.values[v.x], v1 = mesh.values[v.y], v2 = mesh.values[v.z],
+                      v3 = mesh.values[v.w];
+          value = w[0] * v0 + w[1] * v1 + w[2] * v2 + w[3] * v3;
+          slope = dw[0] * v0 + dw[1] * v1 + dw[2] * v2 + dw[3] * v3;
+        }
       }
       at.cell = current;
       at.onRay = true;
@@ -358,8 +359,9 @@ UVR_HOST_DEVICE inline RayResult integrateRay(const SceneView &scene, const Inte
       }
       ++result.samples;
       float value;
-      const uint32_t index = uint32_t(k);
-      const bool trailed = index < trail.size;
+      // Compared as floats: k may lie past what a uint32_t holds where the trail ends.
+      const bool trailed = k < float(trail.size);
+      const uint32_t index = trailed ? uint32_t(k) : 0;
       const bool located = locateSample(scene, skip, clearVoxels, ray, t, walkSteps, far,
                                         trailed ? trail.cells[index] : kNoCell, at, value);
       if (trailed)
