@@ -138,7 +138,6 @@ UVR_HOST_DEVICE inline bool walkTets(const SceneView &scene, const Ray &ray, flo
   for (; step < maxSteps && current < mesh.tetCount; ++step) {
     // Read with the corners, not once the face to cross is known: the next tet is then at hand.
     const Index4 across = Index4::load(scene.tetNeighbors + 4 * uint64_t(current));
-    const Index4 v = Index4::load(mesh.tets + 4 * uint64_t(current));
 #ifdef __CUDA_ARCH__
     const TetAffine *affine = nullptr; // none on the GPU (see tet_affine.h): no code for them in its kernels
 #else
@@ -151,6 +150,8 @@ UVR_HOST_DEVICE inline bool walkTets(const SceneView &scene, const Ray &ray, flo
           __builtin_prefetch(scene.tetAffine + across[i]);
     }
 #endif
+    // The corners only where no record holds the tet: read anyway, they were another line missed per step.
+    const Index4 v = affine ? Index4{} : Index4::load(mesh.tets + 4 * uint64_t(current));
     float dw[4], slope = 0.f;
     if (affine ? !affine->along(p, ray.direction, w, dw, value, slope)
                : !tetBarycentricsAlong(mesh.points[v.x], mesh.points[v.y], mesh.points[v.z], mesh.points[v.w],
