@@ -155,31 +155,35 @@ UVR_HOST_DEVICE void forEachPixelCrossing(const MeshView &mesh, uint32_t face, c
   // Moeller and Trumbore's test, along the unnormalised direction D = forward + u right + v up of the ray
   // through the pixel at image coordinates (u, v): its determinant and both numerators are dot products
   // with D, so linear in u and v, and t along D is the same numerator over the determinant for every pixel.
-  // A crossing is kept within a relative 1e-4 of the face's edges, and its t is scaled to the unit ray.
+  // The rays that meet the face's plane at t > 0 share the sign of that numerator: with it folded into the
+  // determinant and the others, those rays' determinants are positive and the barycentric tests take no
+  // division, which is left for the few rays that pass. A crossing is kept within a relative 1e-4 of the
+  // face's edges, and its t is scaled to the unit ray.
   const Vec3f determinant = cross(e2, e1), first = cross(e2, toEye), second = cross(toEye, e1);
   const float along = dot(e2, second);
+  if (!(along != 0.f)) // the eye lies in the face's plane
+    return;
+  const float sign = along < 0.f ? -1.f : 1.f;
   auto linear = [&](const Vec3f &n, float &base, float &perU, float &perV) {
-    base = dot(camera.forward, n), perU = dot(camera.right, n), perV = dot(camera.up, n);
+    base = sign * dot(camera.forward, n), perU = sign * dot(camera.right, n), perV = sign * dot(camera.up, n);
   };
   float det0, detU, detV, first0, firstU, firstV, second0, secondU, secondV;
   linear(determinant, det0, detU, detV);
   linear(first, first0, firstU, firstV);
   linear(second, second0, secondU, secondV);
   constexpr float kEdgeTolerance = 1e-4f;
+  const float distance = fabsf(along);
   for (int y = y0; y <= y1; ++y) {
     const float v = 1.f - 2.f * (float(y) + 0.5f) / float(camera.height);
+    const float detRow = det0 + v * detV, firstRow = first0 + v * firstV, secondRow = second0 + v * secondV;
     for (int x = x0; x <= x1; ++x) {
       const float u = 2.f * (float(x) + 0.5f) / float(camera.width) - 1.f;
-      const float det = det0 + u * detU + v * detV;
-      if (det == 0.f)
-        continue;
-      const float inv = 1.f / det;
-      const float a = (first0 + u * firstU + v * firstV) * inv,
-                  b = (second0 + u * secondU + v * secondV) * inv;
-      if (!(a >= -kEdgeTolerance && b >= -kEdgeTolerance && a + b <= 1.f + kEdgeTolerance))
+      const float det = detRow + u * detU, a = firstRow + u * firstU, b = secondRow + u * secondU;
+      const float slack = kEdgeTolerance * det;
+      if (!(det > 0.f && a >= -slack && b >= -slack && a + b <= det + slack))
         continue;
       const Vec3f direction = camera.forward + camera.right * u + camera.up * v;
-      const float t = along * inv * sqrtf(dot(direction, direction));
+      const float t = distance / det * sqrtf(dot(direction, direction));
       if (t > 0.f && t < INFINITY)
         visit(uint64_t(y) * uint64_t(camera.width) + uint64_t(x), crossingKey(t, face, exits));
     }
