@@ -3,8 +3,14 @@
 
 #if defined(__CUDACC__)
 #define UVR_HOST_DEVICE __host__ __device__
-#define UVR_INLINE __forceinline__
 #else
 #define UVR_HOST_DEVICE
-#define UVR_INLINE inline
+#endif
+
+// Inlined into each caller even where the compiler would rather call it: for the host's hot loops, where a
+// call leaves the caller's state in memory rather than registers. A GPU compiler inlines on its own.
+#if defined(__CUDA_ARCH__)
+#define UVR_HOST_INLINE inline
+#else
+#define UVR_HOST_INLINE inline __attribute__((always_inline))
 #endif

@@ -117,8 +117,8 @@ UVR_HOST_DEVICE inline uint32_t nextTet(Index4 across, int beyond, const float w
 /// furthest beyond (see nextTet; `alongRay`: the ray passes through `start`), as long as that is a tet; on
 /// success `at` describes the tet holding the sample and `value` is the field there. Gives up after
 /// `maxSteps` tets.
-UVR_HOST_DEVICE inline bool walkTets(const SceneView &scene, const Ray &ray, float t, uint32_t start,
-                                     bool alongRay, int maxSteps, RayCell &at, float &value) {
+UVR_HOST_DEVICE UVR_HOST_INLINE bool walkTets(const SceneView &scene, const Ray &ray, float t, uint32_t start,
+                                              bool alongRay, int maxSteps, RayCell &at, float &value) {
   const MeshView &mesh = scene.mesh;
   uint32_t current = start;
   int step = 0;
