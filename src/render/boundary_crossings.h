@@ -173,13 +173,17 @@ UVR_HOST_DEVICE void forEachPixelCrossing(const MeshView &mesh, uint32_t face, c
   linear(second, second0, secondU, secondV);
   constexpr float kEdgeTolerance = 1e-4f;
   const float distance = fabsf(along);
+#ifdef __CUDA_ARCH__
+  constexpr int kRowChunk = 1; // a GPU thread would keep the chunk's arrays in memory: pixel by pixel
+#else
   constexpr int kRowChunk = 64;
+#endif
   auto imageU = [&](int x) { return 2.f * (float(x) + 0.5f) / float(camera.width) - 1.f; };
   for (int y = y0; y <= y1; ++y) {
     const float v = 1.f - 2.f * (float(y) + 0.5f) / float(camera.height);
     const float detRow = det0 + v * detV, firstRow = first0 + v * firstV, secondRow = second0 + v * secondV;
-    // The row's pixels are tested 64 at a time, with no branch, which leaves the loop to vectorise: which
-    // pixels pass is unpredictable.
+    // On the host, the row's pixels are tested 64 at a time, with no branch, which leaves the loop to
+    // vectorise: which pixels pass is unpredictable.
     for (int xs = x0; xs <= x1; xs += kRowChunk) {
       const int count = x1 - xs + 1 < kRowChunk ? x1 - xs + 1 : kRowChunk;
       float dets[kRowChunk];
