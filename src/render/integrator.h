@@ -136,7 +136,7 @@ UVR_HOST_DEVICE UVR_HOST_INLINE bool walkTets(const SceneView &scene, const Ray 
   }
   const Vec3f p = ray.at(t);
   for (; step < maxSteps && current < mesh.tetCount; ++step) {
-    // Read with the corners, not once the face to cross is known: the next tet is then at hand.
+    // Read before the weights, not once the face to cross is known: the next tet is then at hand.
     const Index4 across = Index4::load(scene.tetNeighbors + 4 * uint64_t(current));
 #ifdef __CUDA_ARCH__
     const TetAffine *affine = nullptr; // none on the GPU (see tet_affine.h): no code for them in its kernels
