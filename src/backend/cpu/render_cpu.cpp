@@ -20,42 +20,44 @@ SampleTotals renderCpu(const SceneView &scene, std::span<const uint32_t> boundar
     findBoundaryCrossings(scene.mesh, boundaryFaces, camera, crossingStart, crossingKeys);
   std::atomic<unsigned long long> total{0};
   std::atomic<uint32_t> max{0};
-  // Small tiles: rays through dense parts of the mesh cost far more than others, so balance finely.
+  // Small tiles: rays through dense parts of the mesh cost far more than others, so balance finely. The
+  // simple partitioner splits down to them; the default one handed out ranges of up to 64×128 pixels.
   constexpr int kTile = 16;
   // A trail entry per grid point along the longest ray through the mesh bounds, within reason.
   const Box3f &bounds = scene.partitions.rootBounds;
   const float gridPoints = length(bounds.upper - bounds.lower) / settings.integrator.s1 + 2.f;
   const uint32_t trailSize = scene.tetNeighbors ? uint32_t(minf(gridPoints, float(1 << 20))) : 0;
-  tbb::parallel_for(tbb::blocked_range2d<int>(0, settings.height, kTile, 0, settings.width, kTile),
-                    [&](const tbb::blocked_range2d<int> &tile) {
-                      uint32_t hint = kNoCell;
-                      std::vector<uint32_t> trail(trailSize, kNoCell);
-                      SampleTotals tileSamples;
-                      const int left = tile.cols().begin(), right = tile.cols().end() - 1;
-                      for (int y = tile.rows().begin(); y < tile.rows().end(); ++y) {
-                        // Serpentine, so that each ray's predecessor is its neighbour (see CellTrail).
-                        const bool leftward = (y - tile.rows().begin()) % 2 == 1;
-                        for (int i = 0; i <= right - left; ++i) {
-                          const int x = leftward ? right - i : left + i;
-                          const size_t pixel = size_t(y) * size_t(settings.width) + size_t(x);
-                          const BoundaryCrossings along =
-                              crossings ? pixelCrossings(crossingStart.data(), crossingKeys.data(), pixel)
-                                        : BoundaryCrossings{};
-                          // A ray that crosses no boundary face is done before it is made.
-                          const RayResult result =
-                              along.none() ? RayResult{}
-                                           : integrateRay(scene, settings.integrator, camera.ray(x, y), hint,
-                                                          along, {trail.data(), trailSize});
-                          target.store(x, y, result);
-                          tileSamples.total += result.samples;
-                          tileSamples.max = std::max(tileSamples.max, result.samples);
-                        }
-                      }
-                      total += tileSamples.total;
-                      for (uint32_t seen = max;
-                           seen < tileSamples.max && !max.compare_exchange_weak(seen, tileSamples.max);)
-                        ;
-                    });
+  tbb::parallel_for(
+      tbb::blocked_range2d<int>(0, settings.height, kTile, 0, settings.width, kTile),
+      [&](const tbb::blocked_range2d<int> &tile) {
+        uint32_t hint = kNoCell;
+        std::vector<uint32_t> trail(trailSize, kNoCell);
+        SampleTotals tileSamples;
+        const int left = tile.cols().begin(), right = tile.cols().end() - 1;
+        for (int y = tile.rows().begin(); y < tile.rows().end(); ++y) {
+          // Serpentine, so that each ray's predecessor is its neighbour (see CellTrail).
+          const bool leftward = (y - tile.rows().begin()) % 2 == 1;
+          for (int i = 0; i <= right - left; ++i) {
+            const int x = leftward ? right - i : left + i;
+            const size_t pixel = size_t(y) * size_t(settings.width) + size_t(x);
+            const BoundaryCrossings along =
+                crossings ? pixelCrossings(crossingStart.data(), crossingKeys.data(), pixel)
+                          : BoundaryCrossings{};
+            // A ray that crosses no boundary face is done before it is made.
+            const RayResult result = along.none() ? RayResult{}
+                                                  : integrateRay(scene, settings.integrator, camera.ray(x, y),
+                                                                 hint, along, {trail.data(), trailSize});
+            target.store(x, y, result);
+            tileSamples.total += result.samples;
+            tileSamples.max = std::max(tileSamples.max, result.samples);
+          }
+        }
+        total += tileSamples.total;
+        for (uint32_t seen = max;
+             seen < tileSamples.max && !max.compare_exchange_weak(seen, tileSamples.max);)
+          ;
+      },
+      tbb::simple_partitioner());
   return {total, max};
 }
 
