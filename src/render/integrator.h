@@ -153,9 +153,15 @@ UVR_HOST_DEVICE UVR_HOST_INLINE bool walkTets(const SceneView &scene, const Ray 
     // The corners only where no record holds the tet: read anyway, they were another line missed per step.
     const Index4 v = affine ? Index4{} : Index4::load(mesh.tets + 4 * uint64_t(current));
     float dw[4], slope = 0.f;
-    if (affine ? !affine->along(p, ray.direction, w, dw, value, slope)
-               : !tetBarycentricsAlong(mesh.points[v.x], mesh.points[v.y], mesh.points[v.z], mesh.points[v.w],
-                                       p, ray.direction, w, dw))
+    bool solved;
+#ifndef __CUDA_ARCH__ // records are host-only: device code must not name along()
+    if (affine)
+      solved = affine->along(p, ray.direction, w, dw, value, slope);
+    else
+#endif
+      solved = tetBarycentricsAlong(mesh.points[v.x], mesh.points[v.y], mesh.points[v.z], mesh.points[v.w], p,
+                                    ray.direction, w, dw);
+    if (!solved)
       return false;
     float lowest;
     const int exit = smallestWeight(w, lowest);
