@@ -22,26 +22,35 @@ struct alignas(64) TetAffine {
   /// out of three 4-wide multiply-adds.
   float gradientX[4], gradientY[4], gradientZ[4];
 
+  /// Weights of `p` (NaN for a flat tet) and the field there. Host only: the GPU keeps no records.
+  void at(Vec3f p, float w[4], float &value) const {
+    const Lanes a = gradientsDot(p - corner);
+    w[0] = 1.f - a[0] - a[1] - a[2];
+    for (int i = 1; i < 4; ++i)
+      w[i] = a[i - 1];
+    value = valueAtCorner + a[3];
+  }
   /// Weights of `p` and their change per unit step along `direction`, as tetBarycentricsAlong gives them,
-  /// and the field there and its change; false for a flat tet. Host only: the GPU keeps no records.
+  /// and the field there and its change; false for a flat tet. Host only, as at().
   bool along(Vec3f p, Vec3f direction, float w[4], float dw[4], float &value, float &slope) const {
-    using Lanes = float __attribute__((vector_size(16)));
+    at(p, w, value);
+    const Lanes change = gradientsDot(direction);
+    dw[0] = -change[0] - change[1] - change[2];
+    for (int i = 1; i < 4; ++i)
+      dw[i] = change[i - 1];
+    slope = change[3];
+    return w[0] == w[0];
+  }
+
+private:
+  using Lanes = float __attribute__((vector_size(16)));
+  /// The four functions' gradients dotted with `v`: weights 1-3 in lanes 0-2, the field in lane 3.
+  Lanes gradientsDot(Vec3f v) const {
     Lanes x, y, z;
     memcpy(&x, gradientX, sizeof x);
     memcpy(&y, gradientY, sizeof y);
     memcpy(&z, gradientZ, sizeof z);
-    const Vec3f q = p - corner;
-    const Lanes at = x * q.x + y * q.y + z * q.z;
-    const Lanes change = x * direction.x + y * direction.y + z * direction.z;
-    w[0] = 1.f - at[0] - at[1] - at[2];
-    dw[0] = -change[0] - change[1] - change[2];
-    for (int i = 1; i < 4; ++i) {
-      w[i] = at[i - 1];
-      dw[i] = change[i - 1];
-    }
-    value = valueAtCorner + at[3];
-    slope = change[3];
-    return w[0] == w[0];
+    return x * v.x + y * v.y + z * v.z;
   }
 };
 static_assert(sizeof(TetAffine) == 64);

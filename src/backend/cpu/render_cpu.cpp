@@ -31,7 +31,7 @@ SampleTotals renderCpu(const SceneView &scene, std::span<const uint32_t> boundar
       tbb::blocked_range2d<int>(0, settings.height, kTile, 0, settings.width, kTile),
       [&](const tbb::blocked_range2d<int> &tile) {
         uint32_t hint = kNoCell;
-        std::vector<uint32_t> trail(trailSize, kNoCell);
+        std::vector<uint32_t> trailCells(trailSize, kNoCell);
         SampleTotals tileSamples;
         const int left = tile.cols().begin(), right = tile.cols().end() - 1;
         for (int y = tile.rows().begin(); y < tile.rows().end(); ++y) {
@@ -40,13 +40,19 @@ SampleTotals renderCpu(const SceneView &scene, std::span<const uint32_t> boundar
           for (int i = 0; i <= right - left; ++i) {
             const int x = leftward ? right - i : left + i;
             const size_t pixel = size_t(y) * size_t(settings.width) + size_t(x);
+            // The next ray in this order, across the row or below at its end, reads the trail this one
+            // writes.
+            const bool rowEnd = i == right - left;
+            const int nextX = rowEnd ? x : leftward ? x - 1 : x + 1, nextY = rowEnd ? y + 1 : y;
+            const Ray next = camera.ray(nextX, nextY);
+            const CellTrail trail{trailCells.data(), trailSize, nextY < tile.rows().end() ? &next : nullptr};
             const BoundaryCrossings along =
                 crossings ? pixelCrossings(crossingStart.data(), crossingKeys.data(), pixel)
                           : BoundaryCrossings{};
             // A ray that crosses no boundary face is done before it is made.
-            const RayResult result = along.none() ? RayResult{}
-                                                  : integrateRay(scene, settings.integrator, camera.ray(x, y),
-                                                                 hint, along, {trail.data(), trailSize});
+            const RayResult result =
+                along.none() ? RayResult{}
+                             : integrateRay(scene, settings.integrator, camera.ray(x, y), hint, along, trail);
             target.store(x, y, result);
             tileSamples.total += result.samples;
             tileSamples.max = std::max(tileSamples.max, result.samples);
