@@ -252,9 +252,9 @@ UVR_HOST_DEVICE inline bool walkCells(const SceneView &scene, const Ray &ray, fl
 /// steps) is walked to again from a cell near it (SeedGridView::startNear), so that the BVH, a long divergent
 /// query on a GPU, is left for what neither walk finds. Without `skipEmpty` a failed walk goes to the BVH, as
 /// in a plain ray marcher.
-UVR_HOST_DEVICE inline bool locateSample(const SceneView &scene, bool skipEmpty, bool clearVoxels,
-                                         const Ray &ray, float t, int walkSteps, bool far, uint32_t guess,
-                                         RayCell &at, float &value) {
+UVR_HOST_DEVICE UVR_HOST_INLINE bool locateSample(const SceneView &scene, bool skipEmpty, bool clearVoxels,
+                                                  const Ray &ray, float t, int walkSteps, bool far,
+                                                  uint32_t guess, RayCell &at, float &value) {
   const Vec3f p = ray.at(t);
   if (skipEmpty && clearVoxels && !scene.occupancy.mayHoldCell(p))
     return false;
@@ -371,6 +371,11 @@ UVR_HOST_DEVICE inline RayResult integrateRay(const SceneView &scene, const Inte
     // previous sample.
     const int walkSteps = 8 * int(stride);
     const bool far = stride * s1 > scene.seeds.grid.voxelEdge();
+    // In registers, not in `result`: with locateSample inlined on the host, the loop makes no call, and each
+    // sample's colour no longer waits on the store of the last one's (3M translucent `full`: 3 % faster).
+    Vec4f color = result.color;
+    uint32_t samples = result.samples;
+    bool opaque = false;
     for (float t = tEnter + k * s1; t < tb; k += stride, t = tEnter + k * s1) {
       if (gaps) {
         uint32_t entered;
@@ -384,7 +389,7 @@ UVR_HOST_DEVICE inline RayResult integrateRay(const SceneView &scene, const Inte
             break;
         }
       }
-      ++result.samples;
+      ++samples;
       float value;
       // Compared as floats: k may lie past what a uint32_t holds where the trail ends.
       const bool trailed = k < float(trail.size);
@@ -413,15 +418,19 @@ UVR_HOST_DEVICE inline RayResult integrateRay(const SceneView &scene, const Inte
       const float exponent = (last ? kEnd - k : stride) * s1 / settings.unit;
       // At the default unit, s1, fixed steps need no correction: powf was 7 % of a CPU frame.
       const float alpha = exponent == 1.f ? minf(c.w, 1.f) : 1.f - powf(maxf(1.f - c.w, 0.f), exponent);
-      const float weight = (1.f - result.color.w) * alpha;
-      result.color.x += weight * c.x;
-      result.color.y += weight * c.y;
-      result.color.z += weight * c.z;
-      result.color.w += weight;
-      if (result.color.w >= settings.terminationOpacity)
-        return false;
+      const float weight = (1.f - color.w) * alpha;
+      color.x += weight * c.x;
+      color.y += weight * c.y;
+      color.z += weight * c.z;
+      color.w += weight;
+      if (color.w >= settings.terminationOpacity) {
+        opaque = true;
+        break;
+      }
     }
-    return true;
+    result.color = color;
+    result.samples = samples;
+    return !opaque;
   };
 
   if (settings.mode == RenderMode::Reference) {
