@@ -34,6 +34,7 @@ SampleTotals renderCpu(const SceneView &scene, std::span<const uint32_t> boundar
         std::vector<uint32_t> trailCells(trailSize, kNoCell);
         SampleTotals tileSamples;
         const int left = tile.cols().begin(), right = tile.cols().end() - 1;
+        Ray ray = camera.ray(left, tile.rows().begin());
         for (int y = tile.rows().begin(); y < tile.rows().end(); ++y) {
           // Serpentine, so that each ray's predecessor is its neighbour (see CellTrail).
           const bool leftward = (y - tile.rows().begin()) % 2 == 1;
@@ -41,7 +42,7 @@ SampleTotals renderCpu(const SceneView &scene, std::span<const uint32_t> boundar
             const int x = leftward ? right - i : left + i;
             const size_t pixel = size_t(y) * size_t(settings.width) + size_t(x);
             // The next ray in this order, across the row or below at its end, reads the trail this one
-            // writes.
+            // writes; made once, for both.
             const bool rowEnd = i == right - left;
             const int nextX = rowEnd ? x : leftward ? x - 1 : x + 1, nextY = rowEnd ? y + 1 : y;
             const Ray next = camera.ray(nextX, nextY);
@@ -49,10 +50,11 @@ SampleTotals renderCpu(const SceneView &scene, std::span<const uint32_t> boundar
             const BoundaryCrossings along =
                 crossings ? pixelCrossings(crossingStart.data(), crossingKeys.data(), pixel)
                           : BoundaryCrossings{};
-            // A ray that crosses no boundary face is done before it is made.
-            const RayResult result =
-                along.none() ? RayResult{}
-                             : integrateRay(scene, settings.integrator, camera.ray(x, y), hint, along, trail);
+            // A ray that crosses no boundary face is done at once.
+            const RayResult result = along.none()
+                                         ? RayResult{}
+                                         : integrateRay(scene, settings.integrator, ray, hint, along, trail);
+            ray = next;
             target.store(x, y, result);
             tileSamples.total += result.samples;
             tileSamples.max = std::max(tileSamples.max, result.samples);
