@@ -91,14 +91,14 @@ struct RayCell {
   UVR_HOST_DEVICE float valueAt(float tNext) const { return value + (tNext - t) * dvalue; }
 };
 
-/// Per grid index (see integrateRay), the tet in which a CPU thread's next ray will most likely find its
-/// sample: each ray reads its entries and then writes there, from the tet its own sample lies in, the one
-/// that holds the next ray's sample at the same index or, where that lies beyond a face, the neighbour across
-/// it (see likelyTet). Neighbouring rays pass a fraction of a cell apart, so a walk from such a guess mostly
-/// ends at its first tet (3M brain: 89 %, against 52 % from the tet the previous ray found), and whether it
-/// does is no longer a coin toss for the branch predictor (`full`, translucent: 10 % faster). One buffer
-/// serves a thread's rays in turn (pixels in serpentine order), and an entry left by an older ray is only a
-/// worse guess. The GPU runs neighbouring rays at once and passes none.
+/// Per grid index (see integrateRay), a guess at the tet holding a CPU thread's next ray's sample: each ray
+/// reads its entries and then writes there, for the next ray, the tet its own sample lies in or, where the
+/// next ray's point of the same index lies beyond a face of it, the neighbour across (see likelyTet).
+/// Neighbouring rays pass a fraction of a cell apart, so a walk from such a guess mostly ends at its first
+/// tet (3M brain: 89 %, against 52 % from the tet the previous ray found), and whether it does is no longer a
+/// coin toss for the branch predictor (`full`, translucent: 10 % faster). One buffer serves a thread's rays
+/// in turn (pixels in serpentine order), and an entry left by an older ray is only a worse guess. The GPU
+/// runs neighbouring rays at once and passes none.
 struct CellTrail {
   uint32_t *cells = nullptr; ///< kNoCell where the ray found no tet
   uint32_t size = 0;
@@ -107,7 +107,7 @@ struct CellTrail {
 
 #ifndef __CUDA_ARCH__
 /// The tet that most likely holds `p`, a point a fraction of a cell from one in `tet`: `tet`, or where `p`
-/// lies beyond a face, the tet across the one it lies furthest beyond. Computed without a branch, since
+/// lies beyond a face, the tet across the face it lies furthest beyond. Computed without a branch, since
 /// which way it goes is a coin toss. Host only: it reads the records.
 inline uint32_t likelyTet(const SceneView &scene, uint32_t tet, Vec3f p) {
   float w[4], value;
@@ -258,8 +258,8 @@ UVR_HOST_DEVICE UVR_HOST_INLINE bool locateSample(const SceneView &scene, bool s
   const Vec3f p = ray.at(t);
   if (skipEmpty && clearVoxels && !scene.occupancy.mayHoldCell(p))
     return false;
-  // Four tets: most walks from a guess end at the first, and one that fails falls back on the ray's own. The
-  // ray's own tet, tested first, held 1 % of the samples whose guess lay elsewhere.
+  // Four tets: most walks from a guess end at the first, and one that fails falls back on the ray's own. A
+  // test of the ray's own tet first would find 1 % of the samples whose guess lies elsewhere.
   if (guess != kNoCell && guess != at.cell && scene.tetNeighbors &&
       walkTets(scene, ray, t, guess, false, 4, at, value))
     return true;
