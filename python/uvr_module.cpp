@@ -2,11 +2,11 @@
 // renderer, with the defaults and error messages of `uvr render`.
 #include "core/error.h"
 #include "core/timer.h"
+#include "engine/render_defaults.h"
+#include "engine/renderer.h"
 #include "image/image.h"
 #include "io/mesh_io.h"
 #include "mesh/mesh_stats.h"
-#include "render/render_defaults.h"
-#include "render/renderer.h"
 
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>

@@ -1,8 +1,8 @@
 // The CUDA backend against the CPU one, frame by frame, on every cell type and mode. Runs where a GPU is.
 #include "core/error.h"
+#include "engine/renderer.h"
 #include "mesh/procedural_mesh.h"
 #include "mesh/tet_neighbors.h"
-#include "render/renderer.h"
 
 #include <gtest/gtest.h>
 
@@ -14,7 +14,7 @@ using namespace uvr;
 
 namespace {
 
-bool haveCudaDevice(const Renderer &renderer) {
+bool haveCudaDevice(Renderer &renderer) {
   try {
     renderer.prepare(parseBackend("cuda"));
     return true;

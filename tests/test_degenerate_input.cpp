@@ -1,9 +1,9 @@
 // Valid meshes with awkward content: NaN scalars and zero-volume or sliver cells render finite pixels, and
 // NaN neither poisons a partition's scalar range nor the field's range.
 #include "accel/partitions.h"
+#include "engine/renderer.h"
 #include "mesh/mesh_stats.h"
 #include "mesh/procedural_mesh.h"
-#include "render/renderer.h"
 
 #include <gtest/gtest.h>
 

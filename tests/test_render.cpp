@@ -1,10 +1,10 @@
 // Whole-frame properties of the integrator: analytic transmittance, equivalence of the modes, no cracks at
 // partition boundaries, independence of cell winding.
 #include "core/error.h"
+#include "engine/renderer.h"
 #include "mesh/procedural_mesh.h"
 #include "mesh/tet_neighbors.h"
 #include "render/boundary_crossings.h"
-#include "render/renderer.h"
 
 #include <gtest/gtest.h>
 
@@ -116,7 +116,7 @@ void expectSameFrame(const Frame &a, const Frame &b, float opacityTolerance, int
 /// Renders `settings` (never terminating early) with a transfer function of constant opacity `alphaPerUnit`
 /// over kBox, and checks each pixel's transmittance against exp(-kappa * length): samples stand for steps, so
 /// it may be off by one sample of length `step`, plus `slack`. Returns how many pixels' rays meet the box.
-int expectExponentialTransmittance(const Renderer &renderer, RenderSettings settings, float alphaPerUnit,
+int expectExponentialTransmittance(Renderer &renderer, RenderSettings settings, float alphaPerUnit,
                                    float step, float slack) {
   settings.integrator.terminationOpacity = 2.f;
   const Camera camera = obliqueCamera();
@@ -210,6 +210,7 @@ TEST_P(Integrator, AdaptiveStepsAreWholeFixedSteps) {
 TEST_P(Integrator, SkippingChangesNoContributingSample) {
   const Mesh mesh = buildMesh(makeBoxGrid(CellType::Tetra, 12, kBox, radial, 0.25f), "box");
   Renderer renderer(mesh, mesh.findField("f"), 32);
+  renderer.prepare(Backend::Cpu);
   renderer.setTransferFunction(TransferFunction(rampMap(), 0.f, 1.f));
   ASSERT_GT(renderer.metadata().transparentCount, 0u);
   ASSERT_LT(renderer.metadata().transparentCount, renderer.partitions().count());
@@ -265,6 +266,8 @@ TEST_P(Integrator, NoCracksAtPartitionBoundaries) {
     const Mesh mesh = buildMesh(makeBoxGrid(type, 10, kBox, [](Vec3f) { return 0.5f; }), "box");
     Renderer one(mesh, mesh.findField("f"), 1u << 30);
     Renderer many(mesh, mesh.findField("f"), 8);
+    one.prepare(Backend::Cpu);
+    many.prepare(Backend::Cpu);
     ASSERT_EQ(one.partitions().count(), 1u);
     ASSERT_GT(many.partitions().count(), 100u);
     one.setTransferFunction(TransferFunction(constantMap(0.2f), 0.f, 1.f));
@@ -618,9 +621,12 @@ TEST(Renderer, LeafSizeIsTheDefaultUnlessGiven) {
   const Mesh mesh = buildMesh(
       makeBoxGrid(CellType::Tetra, 8, {{0.f, 0.f, 0.f}, {1.f, 1.f, 1.f}}, [](Vec3f p) { return p.x; }),
       "box");
-  const Renderer byDefault(mesh, mesh.findField("f"));
+  Renderer byDefault(mesh, mesh.findField("f"));
   EXPECT_EQ(byDefault.leafSize(), defaultLeafSize(mesh.cellCount()));
-  const Renderer given(mesh, mesh.findField("f"), 7);
+  Renderer given(mesh, mesh.findField("f"), 7);
   EXPECT_EQ(given.leafSize(), 7u);
+  EXPECT_THROW(given.partitionCount(Backend::Cpu), Error); // nothing is built on a read
+  byDefault.prepare(Backend::Cpu);
+  given.prepare(Backend::Cpu);
   EXPECT_GT(given.partitionCount(Backend::Cpu), byDefault.partitionCount(Backend::Cpu));
 }

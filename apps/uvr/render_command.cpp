@@ -3,9 +3,9 @@
 
 #include "core/error.h"
 #include "core/timer.h"
+#include "engine/render_defaults.h"
+#include "engine/renderer.h"
 #include "image/image.h"
-#include "render/render_defaults.h"
-#include "render/renderer.h"
 
 #include <nlohmann/json.hpp>
 

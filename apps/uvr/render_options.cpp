@@ -2,8 +2,8 @@
 
 #include "core/error.h"
 #include "core/timer.h"
+#include "engine/render_defaults.h"
 #include "io/mesh_io.h"
-#include "render/render_defaults.h"
 
 #include <cstdio>
 #include <sstream>

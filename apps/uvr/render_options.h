@@ -1,9 +1,9 @@
 // The options `uvr render` and `uvr view` share, and how they become the renderer's inputs.
 #pragma once
 
+#include "engine/renderer.h"
 #include "mesh/mesh.h"
 #include "mesh/mesh_stats.h"
-#include "render/renderer.h"
 
 #include <CLI/CLI.hpp>
 

@@ -2,7 +2,7 @@
 #include "render_options.h"
 
 #include "core/error.h"
-#include "render/render_defaults.h"
+#include "engine/render_defaults.h"
 
 #ifdef UVR_HAS_VIEWER
 #include "viewer.h"

@@ -2,9 +2,9 @@
 // first at a quarter of the resolution, and at full resolution once it has stayed unchanged for a moment.
 #pragma once
 
+#include "engine/render_defaults.h"
+#include "engine/renderer.h"
 #include "mesh/mesh_stats.h"
-#include "render/render_defaults.h"
-#include "render/renderer.h"
 
 #include <nlohmann/json.hpp>
 

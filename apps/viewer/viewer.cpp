@@ -6,8 +6,8 @@
 #include "view_script.h"
 
 #include "core/error.h"
+#include "engine/render_defaults.h"
 #include "image/image.h"
-#include "render/render_defaults.h"
 
 #include <GLFW/glfw3.h>
 #include <backends/imgui_impl_glfw.h>

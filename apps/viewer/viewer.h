@@ -2,10 +2,10 @@
 // colour legend. Nothing here exposes GLFW or OpenGL, so the command compiles without them.
 #pragma once
 
+#include "engine/renderer.h"
 #include "mesh/mesh.h"
 #include "mesh/mesh_stats.h"
 #include "render/color_map.h"
-#include "render/renderer.h"
 
 #include <string>
 #include <vector>

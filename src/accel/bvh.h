@@ -2,6 +2,7 @@
 #pragma once
 
 #include "core/host_device.h"
+#include "core/storage.h"
 #include "core/vec.h"
 #include "mesh/mesh_view.h"
 
@@ -23,13 +24,17 @@ struct BvhView {
   const uint32_t *cellIds = nullptr;
 };
 
-struct Bvh {
-  std::vector<BvhNode> nodes;
-  std::vector<uint32_t> cellIds;
+template <typename Storage> struct BvhArrays {
+  typename Storage::template Array<BvhNode> nodes;
+  typename Storage::template Array<uint32_t> cellIds;
 
   BvhView view() const { return {nodes.data(), cellIds.data()}; }
-  size_t memoryBytes() const { return nodes.size() * sizeof(BvhNode) + cellIds.size() * sizeof(uint32_t); }
+  template <typename A, typename B, typename F> static void forEachMember(A &a, B &b, F &&f) {
+    f(a.nodes, b.nodes);
+    f(a.cellIds, b.cellIds);
+  }
 };
+using Bvh = BvhArrays<HostStorage>;
 
 /// Builds the hierarchy with Embree's SAH builder (all cores) and flattens it.
 Bvh buildBvh(const MeshView &mesh);

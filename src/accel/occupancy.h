@@ -5,6 +5,7 @@
 
 #include "accel/voxel_grid.h"
 #include "core/host_device.h"
+#include "core/storage.h"
 #include "core/vec.h"
 #include "mesh/mesh_view.h"
 
@@ -30,14 +31,18 @@ struct OccupancyView {
   UVR_HOST_DEVICE uint64_t wordCount() const { return (grid.voxelCount() + 63) / 64; }
 };
 
-struct OccupancyGrid {
-  std::vector<uint64_t> bits;
+template <typename Storage> struct OccupancyBits {
+  typename Storage::template Array<uint64_t> bits;
   VoxelGrid grid;
 
   OccupancyView view() const { return {bits.data(), grid}; }
   uint64_t wordCount() const { return view().wordCount(); }
-  size_t memoryBytes() const { return bits.size() * sizeof(uint64_t); }
+  template <typename A, typename B, typename F> static void forEachMember(A &a, B &b, F &&f) {
+    f(a.bits, b.bits);
+    f(a.grid, b.grid);
+  }
 };
+using OccupancyGrid = OccupancyBits<HostStorage>;
 
 /// About `voxelsPerCell` voxels per cell over the mesh bounds (a bit each), set where a cell may reach (its
 /// box; for a tet, the part of its box its face planes do not exclude). The default, 16, made `full` frames

@@ -3,6 +3,7 @@
 #pragma once
 
 #include "core/host_device.h"
+#include "core/storage.h"
 #include "core/vec.h"
 #include "mesh/cell.h"
 #include "mesh/mesh_view.h"
@@ -30,19 +31,30 @@ struct PartitionsView {
   uint32_t count = 0;
 };
 
-struct Partitions {
-  std::vector<KdNode> nodes;
-  std::vector<Box3f> nodeBounds;
-  std::vector<Box3f> bounds;             ///< shrunk box per partition (what nodeBounds holds for its leaf)
-  std::vector<float> valueMin, valueMax; ///< scalar range of the cells listed in each partition
-  std::vector<uint64_t> cellCounts;      ///< cells listed (a cell straddling leaves is listed in each)
+template <typename Storage> struct PartitionArrays {
+  template <typename T> using Array = typename Storage::template Array<T>;
+  Array<KdNode> nodes;
+  Array<Box3f> nodeBounds;
+  Array<Box3f> bounds;             ///< shrunk box per partition (what nodeBounds holds for its leaf)
+  Array<float> valueMin, valueMax; ///< scalar range of the cells listed in each partition
+  Array<uint64_t> cellCounts;      ///< cells listed (a cell straddling leaves is listed in each)
   Box3f rootBounds;
 
   uint32_t count() const { return uint32_t(bounds.size()); }
   PartitionsView view() const {
     return {nodes.data(), nodeBounds.data(), valueMin.data(), valueMax.data(), rootBounds, count()};
   }
+  template <typename A, typename B, typename F> static void forEachMember(A &a, B &b, F &&f) {
+    f(a.nodes, b.nodes);
+    f(a.nodeBounds, b.nodeBounds);
+    f(a.bounds, b.bounds);
+    f(a.valueMin, b.valueMin);
+    f(a.valueMax, b.valueMax);
+    f(a.cellCounts, b.cellCounts);
+    f(a.rootBounds, b.rootBounds);
+  }
 };
+using Partitions = PartitionArrays<HostStorage>;
 
 /// Median-split KD-tree over cell centroids until a leaf holds at most `leafSize` cells.
 Partitions buildPartitions(const MeshView &mesh, uint32_t leafSize);

@@ -12,6 +12,7 @@
 
 #include "accel/voxel_grid.h"
 #include "core/host_device.h"
+#include "core/storage.h"
 #include "core/vec.h"
 #include "mesh/cell.h"
 #include "mesh/mesh_view.h"
@@ -120,21 +121,25 @@ struct SeedGridView {
   }
 };
 
-struct SeedGrid {
-  std::vector<uint32_t> seeds;
-  std::vector<uint32_t> boundaryStart, boundaryFaces; ///< empty where not listed
-  std::vector<uint8_t> boundaryOctants;               ///< one per listed face
+template <typename Storage> struct SeedGridArrays {
+  template <typename T> using Array = typename Storage::template Array<T>;
+  Array<uint32_t> seeds;
+  Array<uint32_t> boundaryStart, boundaryFaces; ///< empty where not listed
+  Array<uint8_t> boundaryOctants;               ///< one per listed face
   VoxelGrid grid;
 
   SeedGridView view() const {
-    return {seeds.data(), boundaryStart.empty() ? nullptr : boundaryStart.data(), boundaryFaces.data(),
-            boundaryOctants.data(), grid};
+    return {seeds.data(), dataOrNull(boundaryStart), boundaryFaces.data(), boundaryOctants.data(), grid};
   }
-  size_t memoryBytes() const {
-    return (seeds.size() + boundaryStart.size() + boundaryFaces.size()) * sizeof(uint32_t) +
-           boundaryOctants.size();
+  template <typename A, typename B, typename F> static void forEachMember(A &a, B &b, F &&f) {
+    f(a.seeds, b.seeds);
+    f(a.boundaryStart, b.boundaryStart);
+    f(a.boundaryFaces, b.boundaryFaces);
+    f(a.boundaryOctants, b.boundaryOctants);
+    f(a.grid, b.grid);
   }
 };
+using SeedGrid = SeedGridArrays<HostStorage>;
 
 /// About `voxelsPerCell` voxels per cell over the mesh bounds, 4 bytes each and 4 more for the face lists,
 /// whose entries take 5 bytes.

@@ -483,7 +483,7 @@ __global__ void gatherLeavesKernel(MeshView mesh, uint64_t cells, const KdNode *
 /// Each partition's box shrunk to its cells within its cell of space, padded as the host pads it.
 __global__ void finishLeavesKernel(uint32_t leafCount, const LeafAccumulator *leaves, const Box3f *leafSpace,
                                    float pad, Box3f *shrunk, float *valueMin, float *valueMax,
-                                   unsigned long long *counts) {
+                                   uint64_t *counts) {
   const uint64_t i = globalIndex();
   if (i >= leafCount)
     return;
@@ -516,6 +516,8 @@ public:
   DeviceBuilder(const MeshView &mesh, uint64_t pointCount, uint32_t leafSize, DeviceAcceleration &out)
       : mesh_(mesh), cells_(mesh.cellCount()), pointCount_(pointCount), leafSize_(leafSize), out_(out) {}
 
+  const std::vector<std::pair<std::string, double>> &stepMs() const { return stepMs_; }
+
   void build() {
     if (cells_ == 0)
       throw Error("the mesh has no volume cells");
@@ -540,7 +542,7 @@ private:
     (this->*work)();
     UVR_CUDA_CHECK(cudaGetLastError());
     UVR_CUDA_CHECK(cudaDeviceSynchronize()); // a fault in the step surfaces here
-    out_.stepMs.emplace_back(name, timer.milliseconds());
+    stepMs_.emplace_back(name, timer.milliseconds());
     progress.advance(1);
   }
 
@@ -586,21 +588,19 @@ private:
   }
 
   void occupancy() {
-    OccupancyView &view = out_.occupancy;
-    view.grid = placeVoxelGrid(meshBounds_, cells_, kDefaultVoxelsPerCell);
-    out_.occupancyBits.resize(view.wordCount());
-    UVR_CUDA_CHECK(cudaMemset(out_.occupancyBits.data(), 0, out_.occupancyBits.bytes()));
-    view.bits = out_.occupancyBits.data();
-    occupancyKernel<<<cellBlocks(), kBlock>>>(
-        mesh_, cells_, view.grid, reinterpret_cast<unsigned long long *>(out_.occupancyBits.data()));
+    OccupancyBits<DeviceStorage> &grid = out_.occupancy;
+    grid.grid = placeVoxelGrid(meshBounds_, cells_, kDefaultVoxelsPerCell);
+    grid.bits.resize(grid.wordCount());
+    UVR_CUDA_CHECK(cudaMemset(grid.bits.data(), 0, grid.bits.bytes()));
+    occupancyKernel<<<cellBlocks(), kBlock>>>(mesh_, cells_, grid.grid,
+                                              reinterpret_cast<unsigned long long *>(grid.bits.data()));
   }
 
   void seeds() {
     out_.seeds.grid = placeVoxelGrid(meshBounds_, cells_, kDefaultSeedVoxelsPerCell);
-    out_.seedCells.resize(out_.seeds.grid.voxelCount());
-    UVR_CUDA_CHECK(cudaMemset(out_.seedCells.data(), 0xff, out_.seedCells.bytes())); // kNoCell
-    out_.seeds.seeds = out_.seedCells.data();
-    seedKernel<<<cellBlocks(), kBlock>>>(mesh_, cells_, out_.seeds.grid, out_.seedCells.data());
+    out_.seeds.seeds.resize(out_.seeds.grid.voxelCount());
+    UVR_CUDA_CHECK(cudaMemset(out_.seeds.seeds.data(), 0xff, out_.seeds.seeds.bytes())); // kNoCell
+    seedKernel<<<cellBlocks(), kBlock>>>(mesh_, cells_, out_.seeds.grid, out_.seeds.seeds.data());
     if (listsBoundaryFaces(mesh_))
       boundaryFaces();
   }
@@ -626,7 +626,7 @@ private:
   /// Compressed rows of the boundary faces per voxel, as the host lists them: counted, offset by a scan, then
   /// filled.
   void boundaryFaces() {
-    const uint64_t voxels = out_.seedCells.size(), entries = 4 * mesh_.tetCount;
+    const uint64_t voxels = out_.seeds.seeds.size(), entries = 4 * mesh_.tetCount;
     DeviceBuffer<uint32_t> slots;
     slots.resize(voxels + 1);
     UVR_CUDA_CHECK(cudaMemset(slots.data(), 0, slots.bytes()));
@@ -641,21 +641,18 @@ private:
     });
     if (downloadOne(total.data()) > UINT32_MAX)
       return;
-    out_.boundaryStart.resize(voxels + 1);
+    out_.seeds.boundaryStart.resize(voxels + 1);
     scratch_.run([&](void *storage, size_t &bytes) {
-      return cub::DeviceScan::ExclusiveSum(storage, bytes, slots.data(), out_.boundaryStart.data(),
+      return cub::DeviceScan::ExclusiveSum(storage, bytes, slots.data(), out_.seeds.boundaryStart.data(),
                                            int64_t(voxels + 1));
     });
-    out_.boundaryFaces.resize(downloadOne(out_.boundaryStart.data() + voxels));
-    out_.boundaryOctants.resize(out_.boundaryFaces.size());
+    out_.seeds.boundaryFaces.resize(downloadOne(out_.seeds.boundaryStart.data() + voxels));
+    out_.seeds.boundaryOctants.resize(out_.seeds.boundaryFaces.size());
     UVR_CUDA_CHECK(
-        cudaMemcpy(slots.data(), out_.boundaryStart.data(), slots.bytes(), cudaMemcpyDeviceToDevice));
+        cudaMemcpy(slots.data(), out_.seeds.boundaryStart.data(), slots.bytes(), cudaMemcpyDeviceToDevice));
     boundaryFacesKernel<<<blocksFor(entries, kBlock), kBlock>>>(
-        mesh_, out_.tetNeighbors.data(), out_.seeds.grid, slots.data(), out_.boundaryFaces.data(),
-        out_.boundaryOctants.data());
-    out_.seeds.boundaryStart = out_.boundaryStart.data();
-    out_.seeds.boundaryFaces = out_.boundaryFaces.data();
-    out_.seeds.boundaryOctants = out_.boundaryOctants.data();
+        mesh_, out_.tetNeighbors.data(), out_.seeds.grid, slots.data(), out_.seeds.boundaryFaces.data(),
+        out_.seeds.boundaryOctants.data());
   }
 
   /// The cells' indices ordered by `keys` (their low `bits` bits; ties by index) into `order`, and the keys
@@ -684,10 +681,10 @@ private:
                                            {scaleOf(extent.x), scaleOf(extent.y), scaleOf(extent.z)},
                                            codes.data());
     UVR_CUDA_CHECK(cudaGetLastError());
-    sortCells(codes, 30, sortedCodes, out_.bvhCellIds);
+    sortCells(codes, 30, sortedCodes, out_.bvh.cellIds);
     if (cells_ <= kLeafCells) { // one leaf
       const BvhNode root{meshBounds_, 0, uint32_t(cells_)};
-      out_.bvhNodes.upload(&root, 1);
+      out_.bvh.nodes.upload(&root, 1);
       return;
     }
     const int64_t inner = int64_t(cells_) - 1;
@@ -704,25 +701,26 @@ private:
     });
     const uint32_t keptCount =
         downloadOne(keptRank.data() + inner - 1) + downloadOne(kept.data() + inner - 1);
-    out_.bvhNodes.resize(1 + 2 * uint64_t(keptCount));
+    out_.bvh.nodes.resize(1 + 2 * uint64_t(keptCount));
     const BvhNode root{Box3f{}, 1, 0}; // its box comes from below
-    UVR_CUDA_CHECK(cudaMemcpy(out_.bvhNodes.data(), &root, sizeof root, cudaMemcpyHostToDevice));
+    UVR_CUDA_CHECK(cudaMemcpy(out_.bvh.nodes.data(), &root, sizeof root, cudaMemcpyHostToDevice));
     DeviceBuffer<uint32_t> parentSlot, arrivals;
     parentSlot.resize(keptCount);
     arrivals.resize(keptCount);
     UVR_CUDA_CHECK(cudaMemset(arrivals.data(), 0, arrivals.bytes()));
-    collapsedTreeKernel<<<blocksFor(inner, kBlock), kBlock>>>(
-        int64_t(cells_), radix.data(), kept.data(), keptRank.data(), out_.bvhNodes.data(), parentSlot.data());
+    collapsedTreeKernel<<<blocksFor(inner, kBlock), kBlock>>>(int64_t(cells_), radix.data(), kept.data(),
+                                                              keptRank.data(), out_.bvh.nodes.data(),
+                                                              parentSlot.data());
     UVR_CUDA_CHECK(cudaGetLastError());
     collapsedBoundsKernel<<<blocksFor(inner, kBlock), kBlock>>>(
-        mesh_, out_.bvhCellIds.data(), int64_t(cells_), kept.data(), keptRank.data(), out_.bvhNodes.data(),
+        mesh_, out_.bvh.cellIds.data(), int64_t(cells_), kept.data(), keptRank.data(), out_.bvh.nodes.data(),
         parentSlot.data(), arrivals.data());
   }
 
   void partitions() {
     const float pad = partitionPadding(meshBounds_);
     const Box3f root = padded(meshBounds_, pad);
-    out_.rootBounds = root;
+    out_.partitions.rootBounds = root;
 
     // The three sorted lists, and their partitioned copies.
     DeviceBuffer<uint32_t> lists[3], spare[3];
@@ -806,30 +804,31 @@ private:
     centroids_.release();
 
     const uint32_t nodeCount = levelBase;
-    out_.partitionCount = leaves;
-    out_.kdNodes.resize(nodeCount);
-    UVR_CUDA_CHECK(
-        cudaMemcpy(out_.kdNodes.data(), nodes.data(), nodeCount * sizeof(KdNode), cudaMemcpyDeviceToDevice));
+    out_.partitions.nodes.resize(nodeCount);
+    UVR_CUDA_CHECK(cudaMemcpy(out_.partitions.nodes.data(), nodes.data(), nodeCount * sizeof(KdNode),
+                              cudaMemcpyDeviceToDevice));
     DeviceBuffer<LeafAccumulator> accumulators;
     accumulators.resize(leaves);
     LeafAccumulator empty{AtomicBox::empty(), orderedBits(INFINITY), orderedBits(-INFINITY), 0};
     clearLeavesKernel<<<blocksFor(leaves, kBlock), kBlock>>>(leaves, empty, accumulators.data());
     UVR_CUDA_CHECK(cudaGetLastError());
-    gatherLeavesKernel<<<cellBlocks(), kBlock>>>(mesh_, cells_, out_.kdNodes.data(), accumulators.data());
+    gatherLeavesKernel<<<cellBlocks(), kBlock>>>(mesh_, cells_, out_.partitions.nodes.data(),
+                                                 accumulators.data());
     UVR_CUDA_CHECK(cudaGetLastError());
-    DeviceBuffer<Box3f> shrunk;
+    DeviceBuffer<Box3f> &shrunk = out_.partitions.bounds;
     shrunk.resize(leaves);
-    out_.valueMin.resize(leaves);
-    out_.valueMax.resize(leaves);
-    out_.cellCounts.resize(leaves);
-    finishLeavesKernel<<<blocksFor(leaves, kBlock), kBlock>>>(leaves, accumulators.data(), leafSpace.data(),
-                                                              pad, shrunk.data(), out_.valueMin.data(),
-                                                              out_.valueMax.data(), out_.cellCounts.data());
+    out_.partitions.valueMin.resize(leaves);
+    out_.partitions.valueMax.resize(leaves);
+    out_.partitions.cellCounts.resize(leaves);
+    finishLeavesKernel<<<blocksFor(leaves, kBlock), kBlock>>>(
+        leaves, accumulators.data(), leafSpace.data(), pad, shrunk.data(), out_.partitions.valueMin.data(),
+        out_.partitions.valueMax.data(), out_.partitions.cellCounts.data());
     UVR_CUDA_CHECK(cudaGetLastError());
-    out_.nodeBounds.resize(nodeCount);
+    out_.partitions.nodeBounds.resize(nodeCount);
     for (auto it = levels.rbegin(); it != levels.rend(); ++it) {
-      nodeBoundsKernel<<<blocksFor(it->second, kBlock), kBlock>>>(it->first, it->second, out_.kdNodes.data(),
-                                                                  shrunk.data(), out_.nodeBounds.data());
+      nodeBoundsKernel<<<blocksFor(it->second, kBlock), kBlock>>>(it->first, it->second,
+                                                                  out_.partitions.nodes.data(), shrunk.data(),
+                                                                  out_.partitions.nodeBounds.data());
       UVR_CUDA_CHECK(cudaGetLastError());
     }
   }
@@ -838,6 +837,7 @@ private:
   uint64_t cells_, pointCount_;
   uint32_t leafSize_;
   DeviceAcceleration &out_;
+  std::vector<std::pair<std::string, double>> stepMs_;
   DeviceBuffer<Vec3f> centroids_;
   DeviceBuffer<uint32_t> cellIndices_; // 0, 1, 2, ...: what the sorts order
   Box3f meshBounds_;
@@ -846,8 +846,11 @@ private:
 
 } // namespace
 
-void buildOnDevice(const MeshView &mesh, uint64_t pointCount, uint32_t leafSize, DeviceAcceleration &out) {
-  DeviceBuilder(mesh, pointCount, leafSize, out).build();
+std::vector<std::pair<std::string, double>> buildOnDevice(const MeshView &mesh, uint64_t pointCount,
+                                                          uint32_t leafSize, DeviceAcceleration &out) {
+  DeviceBuilder builder(mesh, pointCount, leafSize, out);
+  builder.build();
+  return builder.stepMs();
 }
 
 } // namespace uvr

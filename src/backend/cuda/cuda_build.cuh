@@ -6,10 +6,7 @@
 // order, the host's is Embree's.
 #pragma once
 
-#include "accel/bvh.h"
-#include "accel/occupancy.h"
-#include "accel/partitions.h"
-#include "accel/seed_grid.h"
+#include "accel/acceleration.h"
 #include "backend/cuda/device_buffer.cuh"
 #include "mesh/mesh_view.h"
 
@@ -20,36 +17,12 @@
 
 namespace uvr {
 
-struct DeviceAcceleration {
-  DeviceBuffer<uint32_t> tetNeighbors;
-  DeviceBuffer<BvhNode> bvhNodes;
-  DeviceBuffer<uint32_t> bvhCellIds;
-  DeviceBuffer<uint32_t> boundaryFaceList; ///< every boundary face, 4 * tet + i; empty where not listed
-  DeviceBuffer<uint64_t> occupancyBits;
-  OccupancyView occupancy; ///< device pointer to occupancyBits
-  DeviceBuffer<uint32_t> seedCells;
-  DeviceBuffer<uint32_t> boundaryStart, boundaryFaces; ///< empty where not listed
-  DeviceBuffer<uint8_t> boundaryOctants;
-  SeedGridView seeds; ///< device pointers to the four
-  DeviceBuffer<KdNode> kdNodes;
-  DeviceBuffer<Box3f> nodeBounds;
-  DeviceBuffer<float> valueMin, valueMax;
-  DeviceBuffer<unsigned long long> cellCounts; ///< cells listed per partition
-  Box3f rootBounds;
-  uint32_t partitionCount = 0;
-  /// Milliseconds per step, in order, for reports.
-  std::vector<std::pair<std::string, double>> stepMs;
-
-  size_t bytes() const {
-    return tetNeighbors.bytes() + bvhNodes.bytes() + bvhCellIds.bytes() + boundaryFaceList.bytes() +
-           occupancyBits.bytes() + seedCells.bytes() + boundaryStart.bytes() + boundaryFaces.bytes() +
-           boundaryOctants.bytes() + kdNodes.bytes() + nodeBounds.bytes() + valueMin.bytes() +
-           valueMax.bytes() + cellCounts.bytes();
-  }
-};
+using DeviceAcceleration = Acceleration<DeviceStorage>;
 
 /// Builds everything a ray reads besides the mesh and the transfer function, from `mesh` (device pointers;
-/// `pointCount` points), with partitions of at most `leafSize` cells where they can be split.
-void buildOnDevice(const MeshView &mesh, uint64_t pointCount, uint32_t leafSize, DeviceAcceleration &out);
+/// `pointCount` points), with partitions of at most `leafSize` cells where they can be split. Returns the
+/// milliseconds per step, in order, for reports.
+std::vector<std::pair<std::string, double>> buildOnDevice(const MeshView &mesh, uint64_t pointCount,
+                                                          uint32_t leafSize, DeviceAcceleration &out);
 
 } // namespace uvr

@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <string>
 #include <utility>
+#include <vector>
 
 namespace uvr {
 
@@ -80,6 +81,20 @@ private:
   T *data_ = nullptr;
   size_t count_ = 0;
 };
+
+/// Acceleration structures in device memory (see core/storage.h).
+struct DeviceStorage {
+  template <typename T> using Array = DeviceBuffer<T>;
+};
+
+/// Copies between host and device arrays, for copyStorage.
+template <typename T> void copyMember(DeviceBuffer<T> &to, const std::vector<T> &from) {
+  to.upload(from.data(), from.size());
+}
+template <typename T> void copyMember(std::vector<T> &to, const DeviceBuffer<T> &from) {
+  to.resize(from.size());
+  from.download(to.data(), to.size());
+}
 
 inline unsigned blocksFor(uint64_t threads, int block) {
   return unsigned((threads + uint64_t(block) - 1) / uint64_t(block));

@@ -3,10 +3,7 @@
 // header: no CUDA types leak out.
 #pragma once
 
-#include "render/camera.h"
-#include "render/integrator.h"
-#include "render/pixel.h"
-#include "render/renderer.h"
+#include "backend/backend.h"
 
 #include <cstddef>
 #include <cstdint>
@@ -17,40 +14,39 @@
 
 namespace uvr {
 
-class CudaRenderer {
+class CudaBackend final : public RenderBackend {
 public:
   /// Uploads `mesh` (host pointers, `pointCount` points) to the current GPU and builds the acceleration data
   /// there, with partitions of at most `leafSize` cells; throws uvr::Error when there is no GPU or memory
   /// runs out.
-  CudaRenderer(const MeshView &mesh, uint64_t pointCount, uint32_t leafSize);
-  ~CudaRenderer();
-  CudaRenderer(const CudaRenderer &) = delete;
-  CudaRenderer &operator=(const CudaRenderer &) = delete;
+  CudaBackend(const MeshView &mesh, uint64_t pointCount, uint32_t leafSize);
+  ~CudaBackend() override;
+  CudaBackend(const CudaBackend &) = delete;
+  CudaBackend &operator=(const CudaBackend &) = delete;
 
   /// Uploads `tf` and recomputes the partitions' metadata on the GPU, as computePartitionMetadata does on the
   /// host; returns the number of fully transparent partitions.
-  uint32_t setTransferFunction(const TransferFunction &tf);
+  uint32_t setTransferFunction(const TransferFunction &tf) override;
   /// Copies the metadata of the last setTransferFunction back, for checks against the host's.
-  PartitionMetadata metadata() const;
+  PartitionMetadata metadata() const override;
   /// Copies the acceleration data the GPU built back, for checks against the host's builds.
-  HostAcceleration acceleration() const;
+  HostAcceleration acceleration() const override;
 
-  uint32_t partitionCount() const;
+  uint32_t partitionCount() const override;
   /// Milliseconds the build on the GPU took, in all and per step (upload of the mesh excluded).
-  double buildMs() const;
-  const std::vector<std::pair<std::string, double>> &buildSteps() const;
+  double buildMs() const override;
+  std::vector<std::pair<std::string, double>> buildSteps() const override;
 
-  /// Renders into `target`'s host buffers (width x height pixels; those null are not copied back) and
-  /// `samples`; returns the milliseconds the frame's kernels took on the GPU (crossings pass and render
-  /// kernel), without the copies.
-  double render(const CameraView &camera, const IntegratorSettings &settings, const PixelTarget &target,
-                int height, SampleTotals &samples);
+  /// Renders into `target`'s host buffers (those null are not copied back); `kernelMs`: the frame's
+  /// kernels on the GPU (crossings pass and render kernel), without the copies.
+  SampleTotals render(const CameraView &camera, const IntegratorSettings &settings, const PixelTarget &target,
+                      double &kernelMs) override;
 
   /// Device memory held: the scene alone (mesh, field, acceleration, partitions, transfer function), and all
   /// of it including the frame buffers.
-  size_t sceneBytes() const;
-  size_t memoryBytes() const;
-  const std::string &deviceName() const;
+  size_t deviceSceneBytes() const override;
+  size_t deviceMemoryBytes() const override;
+  std::string deviceName() const override;
 
 private:
   /// Every pixel's boundary crossings for `camera`, into the crossing buffers (see findBoundaryCrossings).

@@ -1,6 +1,9 @@
+#include "backend/cpu/cpu_backend.h"
+
+#include "core/error.h"
+#include "core/timer.h"
 #include "render/boundary_crossings.h"
-#include "render/pixel.h"
-#include "render/renderer.h"
+#include "render/scene.h"
 
 #include <tbb/blocked_range2d.h>
 #include <tbb/parallel_for.h>
@@ -11,10 +14,36 @@
 
 namespace uvr {
 
-SampleTotals renderCpu(const SceneView &scene, std::span<const uint32_t> boundaryFaces,
-                       const CameraView &camera, const RenderSettings &settings, const PixelTarget &target) {
+CpuBackend::CpuBackend(const Mesh &mesh, const MeshView &view, uint32_t leafSize) : mesh_(view) {
+  const Timer timer;
+  accel_ = buildHostAcceleration(mesh, view, leafSize);
+  buildMs_ = timer.milliseconds();
+}
+
+uint32_t CpuBackend::setTransferFunction(const TransferFunction &tf) {
+  tf_.emplace(tf);
+  metadata_ = computePartitionMetadata(accel_.partitions, *tf_);
+  return metadata_.transparentCount;
+}
+
+SceneView CpuBackend::sceneView() const {
+  if (!tf_)
+    throw Error("no transfer function set");
+  SceneView scene = makeSceneView(mesh_, accel_);
+  scene.nodeMaxOpacity = metadata_.nodeMaxOpacity.data();
+  scene.nodeMinSigma = metadata_.nodeMinSigma.data();
+  scene.sigma = metadata_.sigma.data();
+  scene.tf = tf_->view();
+  return scene;
+}
+
+SampleTotals CpuBackend::render(const CameraView &camera, const IntegratorSettings &settings,
+                                const PixelTarget &target, double &kernelMs) {
+  kernelMs = 0.0;
+  const SceneView scene = sceneView();
+  const std::vector<uint32_t> &boundaryFaces = accel_.boundaryFaceList;
   std::vector<uint64_t> crossingStart, crossingKeys;
-  const bool crossings = skipsSpace(settings.integrator.mode) && !boundaryFaces.empty() &&
+  const bool crossings = skipsSpace(settings.mode) && !boundaryFaces.empty() &&
                          crossingsApply(camera, scene.partitions.rootBounds);
   if (crossings)
     findBoundaryCrossings(scene.mesh, boundaryFaces, camera, crossingStart, crossingKeys);
@@ -25,10 +54,10 @@ SampleTotals renderCpu(const SceneView &scene, std::span<const uint32_t> boundar
   constexpr int kTile = 16;
   // A trail entry per grid point along the longest ray through the mesh bounds, within reason.
   const Box3f &bounds = scene.partitions.rootBounds;
-  const float gridPoints = length(bounds.upper - bounds.lower) / settings.integrator.s1 + 2.f;
+  const float gridPoints = length(bounds.upper - bounds.lower) / settings.s1 + 2.f;
   const uint32_t trailSize = scene.tetNeighbors ? uint32_t(minf(gridPoints, float(1 << 20))) : 0;
   tbb::parallel_for(
-      tbb::blocked_range2d<int>(0, settings.height, kTile, 0, settings.width, kTile),
+      tbb::blocked_range2d<int>(0, camera.height, kTile, 0, camera.width, kTile),
       [&](const tbb::blocked_range2d<int> &tile) {
         uint32_t hint = kNoCell;
         std::vector<uint32_t> trailCells(trailSize, kNoCell);
@@ -40,7 +69,7 @@ SampleTotals renderCpu(const SceneView &scene, std::span<const uint32_t> boundar
           const bool leftward = (y - tile.rows().begin()) % 2 == 1;
           for (int i = 0; i <= right - left; ++i) {
             const int x = leftward ? right - i : left + i;
-            const size_t pixel = size_t(y) * size_t(settings.width) + size_t(x);
+            const size_t pixel = size_t(y) * size_t(camera.width) + size_t(x);
             // The next ray in this order, across the row or below at its end, reads the trail this one
             // writes; made once, for both.
             const bool rowEnd = i == right - left;
@@ -51,9 +80,8 @@ SampleTotals renderCpu(const SceneView &scene, std::span<const uint32_t> boundar
                 crossings ? pixelCrossings(crossingStart.data(), crossingKeys.data(), pixel)
                           : BoundaryCrossings{};
             // A ray that crosses no boundary face is done at once.
-            const RayResult result = along.none()
-                                         ? RayResult{}
-                                         : integrateRay(scene, settings.integrator, ray, hint, along, trail);
+            const RayResult result =
+                along.none() ? RayResult{} : integrateRay(scene, settings, ray, hint, along, trail);
             ray = next;
             target.store(x, y, result);
             tileSamples.total += result.samples;

@@ -1,4 +1,4 @@
-#include "render/render_defaults.h"
+#include "engine/render_defaults.h"
 
 #include "core/error.h"
 

@@ -1,9 +1,10 @@
-#include "backend/cuda/cuda_renderer.h"
+#include "backend/cuda/cuda_backend.h"
 
 #include "backend/cuda/cuda_build.cuh"
 #include "backend/cuda/device_buffer.cuh"
 #include "core/error.h"
 #include "core/timer.h"
+#include "render/scene.h"
 
 #include <cub/block/block_reduce.cuh>
 #include <cub/device/device_scan.cuh>
@@ -16,7 +17,6 @@
 #include <algorithm>
 #include <cstring>
 #include <string>
-#include <type_traits>
 #include <vector>
 
 namespace uvr {
@@ -50,7 +50,7 @@ constexpr unsigned kRenderBlockThreads = 128;
 /// Marching every ray, warps of 16x2 pixels are fastest (on an H200, side by side: `reference` 3-13 % faster
 /// than in rows). Skipping, the better shape depends on the transfer function: on an H100, `full` 857k with
 /// the binary brain preset 0.79 ms in rows against 0.97 in tiles, with the translucent one 1.67 against
-/// 1.52. CudaRenderer::render times both.
+/// 1.52. CudaBackend::render times both.
 dim3 renderBlock(RenderMode mode, bool tiles) {
   if (!skipsSpace(mode))
     return dim3(16, kRenderBlockThreads / 16);
@@ -234,7 +234,7 @@ private:
   size_t capacity_ = 0;
 };
 
-struct CudaRenderer::Impl {
+struct CudaBackend::Impl {
   std::string deviceName;
   SceneView scene; // device pointers
   DeviceBuffer<Vec3f> points;
@@ -242,6 +242,7 @@ struct CudaRenderer::Impl {
   DeviceBuffer<float> values, nodeMaxOpacity, nodeMinSigma, sigma;
   DeviceAcceleration accel;
   double buildMs = 0.0;
+  std::vector<std::pair<std::string, double>> buildSteps;
   DeviceBuffer<uint32_t> kdParents, partitionNodes;
   DeviceBuffer<MetadataTotals> totals;
   DeviceBuffer<double> tfPrefixSum, tfPrefixSquares;
@@ -276,7 +277,7 @@ struct CudaRenderer::Impl {
   }
 };
 
-CudaRenderer::CudaRenderer(const MeshView &mesh, uint64_t pointCount, uint32_t leafSize)
+CudaBackend::CudaBackend(const MeshView &mesh, uint64_t pointCount, uint32_t leafSize)
     : impl_(std::make_unique<Impl>()) {
   int devices = 0;
   const cudaError_t status = cudaGetDeviceCount(&devices);
@@ -291,27 +292,22 @@ CudaRenderer::CudaRenderer(const MeshView &mesh, uint64_t pointCount, uint32_t l
   UVR_CUDA_CHECK(cudaEventCreate(&d.kernelStart));
   UVR_CUDA_CHECK(cudaEventCreate(&d.kernelEnd));
   UVR_CUDA_CHECK(cudaEventCreate(&d.renderStart));
-  SceneView &scene = d.scene;
-  scene.mesh = mesh;
-  scene.mesh.points = d.points.upload(mesh.points, pointCount);
-  scene.mesh.tets = d.tets.upload(mesh.tets, 4 * mesh.tetCount);
-  scene.mesh.pyramids = d.pyramids.upload(mesh.pyramids, 5 * mesh.pyramidCount);
-  scene.mesh.wedges = d.wedges.upload(mesh.wedges, 6 * mesh.wedgeCount);
-  scene.mesh.hexes = d.hexes.upload(mesh.hexes, 8 * mesh.hexCount);
-  scene.mesh.values =
+  MeshView onDevice = mesh;
+  onDevice.points = d.points.upload(mesh.points, pointCount);
+  onDevice.tets = d.tets.upload(mesh.tets, 4 * mesh.tetCount);
+  onDevice.pyramids = d.pyramids.upload(mesh.pyramids, 5 * mesh.pyramidCount);
+  onDevice.wedges = d.wedges.upload(mesh.wedges, 6 * mesh.wedgeCount);
+  onDevice.hexes = d.hexes.upload(mesh.hexes, 8 * mesh.hexCount);
+  onDevice.values =
       mesh.values ? d.values.upload(mesh.values, mesh.cellCentered ? mesh.cellCount() : pointCount) : nullptr;
 
   const Timer timer;
-  DeviceAcceleration &accel = d.accel;
-  buildOnDevice(scene.mesh, pointCount, leafSize, accel);
+  d.buildSteps = buildOnDevice(onDevice, pointCount, leafSize, d.accel);
   d.buildMs = timer.milliseconds();
-  scene.tetNeighbors = accel.tetNeighbors.size() > 0 ? accel.tetNeighbors.data() : nullptr;
-  scene.bvh = {accel.bvhNodes.data(), accel.bvhCellIds.data()};
-  scene.occupancy = accel.occupancy;
-  scene.seeds = accel.seeds;
-  const uint32_t nodeCount = uint32_t(accel.kdNodes.size()), partitionCount = accel.partitionCount;
-  scene.partitions = {accel.kdNodes.data(),  accel.nodeBounds.data(), accel.valueMin.data(),
-                      accel.valueMax.data(), accel.rootBounds,        partitionCount};
+  SceneView &scene = d.scene;
+  scene = makeSceneView(onDevice, d.accel);
+  const uint32_t nodeCount = uint32_t(d.accel.partitions.nodes.size()),
+                 partitionCount = scene.partitions.count;
 
   d.kdParents.resize(nodeCount);
   d.partitionNodes.resize(partitionCount);
@@ -328,9 +324,9 @@ CudaRenderer::CudaRenderer(const MeshView &mesh, uint64_t pointCount, uint32_t l
   UVR_CUDA_CHECK(cudaDeviceSynchronize());
 }
 
-CudaRenderer::~CudaRenderer() = default;
+CudaBackend::~CudaBackend() = default;
 
-uint32_t CudaRenderer::setTransferFunction(const TransferFunction &tf) {
+uint32_t CudaBackend::setTransferFunction(const TransferFunction &tf) {
   Impl &d = *impl_;
   TransferFunctionRangeView ranges = tf.rangeView();
   ranges.function.table = d.tfTable.upload(tf.table().data(), tf.table().size());
@@ -358,7 +354,7 @@ uint32_t CudaRenderer::setTransferFunction(const TransferFunction &tf) {
   return totals.transparent;
 }
 
-PartitionMetadata CudaRenderer::metadata() const {
+PartitionMetadata CudaBackend::metadata() const {
   const Impl &d = *impl_;
   PartitionMetadata meta;
   const uint32_t count = d.scene.partitions.count;
@@ -380,7 +376,7 @@ PartitionMetadata CudaRenderer::metadata() const {
   return meta;
 }
 
-void CudaRenderer::findCrossings(const CameraView &camera, size_t pixels) {
+void CudaBackend::findCrossings(const CameraView &camera, size_t pixels) {
   Impl &d = *impl_;
   const uint64_t faces = d.accel.boundaryFaceList.size();
   const unsigned blocks = blocksFor(faces, kRenderBlockThreads);
@@ -411,9 +407,11 @@ void CudaRenderer::findCrossings(const CameraView &camera, size_t pixels) {
   });
 }
 
-double CudaRenderer::render(const CameraView &camera, const IntegratorSettings &settings,
-                            const PixelTarget &target, int height, SampleTotals &samples) {
+SampleTotals CudaBackend::render(const CameraView &camera, const IntegratorSettings &settings,
+                                 const PixelTarget &target, double &kernelMs) {
   Impl &d = *impl_;
+  const int height = camera.height;
+  SampleTotals samples;
   const size_t pixels = size_t(target.width) * size_t(height);
   d.rgb.resize(3 * pixels);
   d.opacity.resize(target.opacity ? pixels : 0);
@@ -498,18 +496,19 @@ double CudaRenderer::render(const CameraView &camera, const IntegratorSettings &
     else
       d.tiles = renderMs < d.rowsMs;
   }
-  float kernelMs = 0.f;
-  UVR_CUDA_CHECK(cudaEventElapsedTime(&kernelMs, d.kernelStart, d.kernelEnd));
-  return kernelMs;
+  float kernelTime = 0.f;
+  UVR_CUDA_CHECK(cudaEventElapsedTime(&kernelTime, d.kernelStart, d.kernelEnd));
+  kernelMs = kernelTime;
+  return samples;
 }
 
-size_t CudaRenderer::memoryBytes() const {
+size_t CudaBackend::deviceMemoryBytes() const {
   const Impl &d = *impl_;
-  return sceneBytes() + d.rgb.bytes() + d.opacity.bytes() + d.samples.bytes() + d.sampleTotals.bytes() +
+  return deviceSceneBytes() + d.rgb.bytes() + d.opacity.bytes() + d.samples.bytes() + d.sampleTotals.bytes() +
          d.crossingStart.bytes() + d.crossingKeys.bytes() + d.placedCrossings.bytes();
 }
 
-size_t CudaRenderer::sceneBytes() const {
+size_t CudaBackend::deviceSceneBytes() const {
   const Impl &d = *impl_;
   return d.points.bytes() + d.tets.bytes() + d.pyramids.bytes() + d.wedges.bytes() + d.hexes.bytes() +
          d.values.bytes() + d.accel.bytes() + d.nodeMaxOpacity.bytes() + d.nodeMinSigma.bytes() +
@@ -517,48 +516,16 @@ size_t CudaRenderer::sceneBytes() const {
          d.tfTable.bytes() + d.tfPrefixSum.bytes() + d.tfPrefixSquares.bytes() + d.tfOpacityMax.bytes();
 }
 
-uint32_t CudaRenderer::partitionCount() const { return impl_->scene.partitions.count; }
-double CudaRenderer::buildMs() const { return impl_->buildMs; }
-const std::vector<std::pair<std::string, double>> &CudaRenderer::buildSteps() const {
-  return impl_->accel.stepMs;
-}
+uint32_t CudaBackend::partitionCount() const { return impl_->scene.partitions.count; }
+double CudaBackend::buildMs() const { return impl_->buildMs; }
+std::vector<std::pair<std::string, double>> CudaBackend::buildSteps() const { return impl_->buildSteps; }
 
-HostAcceleration CudaRenderer::acceleration() const {
-  const DeviceAcceleration &accel = impl_->accel;
-  auto copy = [](const auto &buffer) {
-    std::vector<std::remove_cv_t<std::remove_pointer_t<decltype(buffer.data())>>> host(buffer.size());
-    buffer.download(host.data(), host.size());
-    return host;
-  };
+HostAcceleration CudaBackend::acceleration() const {
   HostAcceleration out;
-  out.bvh.nodes = copy(accel.bvhNodes);
-  out.bvh.cellIds = copy(accel.bvhCellIds);
-  out.tetNeighbors = copy(accel.tetNeighbors);
-  OccupancyGrid &grid = out.occupancy;
-  grid.bits = copy(accel.occupancyBits);
-  grid.grid = accel.occupancy.grid;
-  SeedGrid &seeds = out.seeds;
-  seeds.seeds = copy(accel.seedCells);
-  seeds.boundaryStart = copy(accel.boundaryStart);
-  seeds.boundaryFaces = copy(accel.boundaryFaces);
-  seeds.boundaryOctants = copy(accel.boundaryOctants);
-  seeds.grid = accel.seeds.grid;
-  out.boundaryFaceList = copy(accel.boundaryFaceList);
-  Partitions &parts = out.partitions;
-  parts.nodes = copy(accel.kdNodes);
-  parts.nodeBounds = copy(accel.nodeBounds);
-  parts.valueMin = copy(accel.valueMin);
-  parts.valueMax = copy(accel.valueMax);
-  const std::vector<unsigned long long> counts = copy(accel.cellCounts);
-  parts.cellCounts.assign(counts.begin(), counts.end());
-  parts.rootBounds = accel.rootBounds;
-  parts.bounds.resize(accel.partitionCount);
-  for (size_t node = 0; node < parts.nodes.size(); ++node)
-    if (parts.nodes[node].axis == KdNode::kLeaf)
-      parts.bounds[parts.nodes[node].child] = parts.nodeBounds[node];
+  copyStorage(out, impl_->accel);
   return out;
 }
 
-const std::string &CudaRenderer::deviceName() const { return impl_->deviceName; }
+std::string CudaBackend::deviceName() const { return impl_->deviceName; }
 
 } // namespace uvr

@@ -2,10 +2,10 @@
 // so that the same view renders the same image from each of them.
 #pragma once
 
+#include "engine/renderer.h"
 #include "mesh/mesh.h"
 #include "render/camera.h"
 #include "render/color_map.h"
-#include "render/renderer.h"
 
 #include <nlohmann/json.hpp>
 

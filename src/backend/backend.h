@@ -1,0 +1,66 @@
+// The interface below the Renderer façade: one backend holds one mesh's acceleration data on its processor,
+// the current transfer function and the partitions' metadata under it, and draws frames. Each is built whole
+// when made; nothing is built or computed on a later read.
+#pragma once
+
+#include "accel/acceleration.h"
+#include "mesh/mesh.h"
+#include "mesh/mesh_view.h"
+#include "render/camera.h"
+#include "render/integrator.h"
+#include "render/pixel.h"
+#include "render/transfer_function.h"
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace uvr {
+
+enum class Backend : uint8_t { Cpu, Cuda };
+
+const char *backendName(Backend backend);
+/// Parses cpu|cuda; throws uvr::Error otherwise, and for cuda when this build has no CUDA backend.
+Backend parseBackend(const std::string &name);
+/// Whether this build has `backend`.
+bool backendBuilt(Backend backend);
+
+class RenderBackend {
+public:
+  virtual ~RenderBackend() = default;
+
+  /// Takes `tf` and recomputes the partitions' metadata; returns how many partitions it makes fully
+  /// transparent.
+  virtual uint32_t setTransferFunction(const TransferFunction &tf) = 0;
+  /// Draws a frame of `camera.width` x `camera.height` pixels into `target` (its host buffers) with the
+  /// current transfer function; returns the samples taken. `kernelMs` is the GPU time of the frame's
+  /// kernels, without copies; 0 on the CPU.
+  virtual SampleTotals render(const CameraView &camera, const IntegratorSettings &settings,
+                              const PixelTarget &target, double &kernelMs) = 0;
+
+  virtual uint32_t partitionCount() const = 0;
+  /// Milliseconds the acceleration build took (on a GPU, the mesh's upload excluded), in all and per step
+  /// where the backend reports steps.
+  virtual double buildMs() const = 0;
+  virtual std::vector<std::pair<std::string, double>> buildSteps() const { return {}; }
+  /// The device and the device memory held, the scene alone and all of it with the frame buffers; empty
+  /// and 0 on the host.
+  virtual std::string deviceName() const { return {}; }
+  virtual size_t deviceSceneBytes() const { return 0; }
+  virtual size_t deviceMemoryBytes() const { return 0; }
+
+  /// Copies of what the backend holds, for checks against the host's builds: the acceleration data and the
+  /// metadata under the current transfer function.
+  virtual HostAcceleration acceleration() const = 0;
+  virtual PartitionMetadata metadata() const = 0;
+};
+
+/// Makes `backend` for `mesh` (`view` of its field), building its acceleration data with partitions of at
+/// most `leafSize` cells. Throws uvr::Error where the build has no such backend, or its device fails.
+std::unique_ptr<RenderBackend> makeBackend(Backend backend, const Mesh &mesh, const MeshView &view,
+                                           uint32_t leafSize);
+
+} // namespace uvr

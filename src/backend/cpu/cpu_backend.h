@@ -1,0 +1,37 @@
+// The CPU backend: the acceleration data built on the host, frames drawn with all cores through TBB.
+#pragma once
+
+#include "backend/backend.h"
+
+#include <optional>
+
+namespace uvr {
+
+class CpuBackend final : public RenderBackend {
+public:
+  /// Builds the acceleration data for `view` (of `mesh`, which must outlive the backend).
+  CpuBackend(const Mesh &mesh, const MeshView &view, uint32_t leafSize);
+
+  uint32_t setTransferFunction(const TransferFunction &tf) override;
+  SampleTotals render(const CameraView &camera, const IntegratorSettings &settings, const PixelTarget &target,
+                      double &kernelMs) override;
+  uint32_t partitionCount() const override { return accel_.partitions.count(); }
+  double buildMs() const override { return buildMs_; }
+  HostAcceleration acceleration() const override { return accel_; }
+  PartitionMetadata metadata() const override { return metadata_; }
+
+  /// What it built, in place.
+  const HostAcceleration &data() const { return accel_; }
+  const PartitionMetadata &currentMetadata() const { return metadata_; }
+
+private:
+  SceneView sceneView() const; ///< all a ray reads; needs the transfer function
+
+  MeshView mesh_;
+  HostAcceleration accel_;
+  double buildMs_ = 0.0;
+  std::optional<TransferFunction> tf_;
+  PartitionMetadata metadata_;
+};
+
+} // namespace uvr

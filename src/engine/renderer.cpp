@@ -1,0 +1,136 @@
+#include "engine/renderer.h"
+
+#include "backend/cpu/cpu_backend.h"
+#include "core/error.h"
+#include "core/timer.h"
+#include "render/pixel.h"
+
+namespace uvr {
+
+const char *modeName(RenderMode mode) {
+  switch (mode) {
+  case RenderMode::Reference:
+    return "reference";
+  case RenderMode::Skip:
+    return "skip";
+  case RenderMode::Adaptive:
+    return "adaptive";
+  case RenderMode::Full:
+    return "full";
+  }
+  return "?";
+}
+
+RenderMode parseMode(const std::string &name) {
+  for (RenderMode mode : {RenderMode::Reference, RenderMode::Skip, RenderMode::Adaptive, RenderMode::Full})
+    if (name == modeName(mode))
+      return mode;
+  throw Error("unknown mode '" + name + "': expected reference, skip, adaptive or full");
+}
+
+Renderer::Renderer(const Mesh &mesh, int fieldIndex, uint32_t leafSize) : mesh_(mesh), leafSize_(leafSize) {
+  if (fieldIndex < 0 || size_t(fieldIndex) >= mesh.fields.size())
+    throw Error("the mesh has no scalar field to render");
+  meshView_ = makeMeshView(mesh_, fieldIndex);
+}
+
+Renderer::~Renderer() = default;
+
+void Renderer::setTransferFunction(TransferFunction tf) {
+  const Timer timer;
+  tf_.emplace(std::move(tf));
+  for (const std::unique_ptr<RenderBackend> &b : backends_)
+    if (b)
+      transparentPartitions_ = b->setTransferFunction(*tf_);
+  tfUpdateMs_ = timer.milliseconds();
+}
+
+const TransferFunction &Renderer::transferFunction() const {
+  if (!tf_)
+    throw Error("no transfer function set");
+  return *tf_;
+}
+
+void Renderer::prepare(Backend which) {
+  std::unique_ptr<RenderBackend> &b = backends_[size_t(which)];
+  if (b)
+    return;
+  b = makeBackend(which, mesh_, meshView_, leafSize());
+  if (tf_)
+    transparentPartitions_ = b->setTransferFunction(*tf_);
+}
+
+bool Renderer::prepared(Backend which) const { return backends_[size_t(which)] != nullptr; }
+
+RenderBackend &Renderer::backend(Backend which) const {
+  if (!prepared(which))
+    throw Error(std::string("the ") + backendName(which) + " backend has not been prepared");
+  return *backends_[size_t(which)];
+}
+
+const CpuBackend &Renderer::cpu() const { return static_cast<const CpuBackend &>(backend(Backend::Cpu)); }
+
+uint32_t Renderer::leafSize() const {
+  return leafSize_ != kAutoLeafSize ? leafSize_ : defaultLeafSize(mesh_.cellCount());
+}
+
+uint32_t Renderer::partitionCount(Backend which) const { return backend(which).partitionCount(); }
+double Renderer::buildMs(Backend which) const { return backend(which).buildMs(); }
+const Partitions &Renderer::partitions() const { return cpu().data().partitions; }
+const PartitionMetadata &Renderer::metadata() const { return cpu().currentMetadata(); }
+
+std::string Renderer::deviceName() const {
+  return prepared(Backend::Cuda) ? backend(Backend::Cuda).deviceName() : std::string();
+}
+size_t Renderer::deviceMemoryBytes() const {
+  return prepared(Backend::Cuda) ? backend(Backend::Cuda).deviceMemoryBytes() : 0;
+}
+size_t Renderer::deviceSceneBytes() const {
+  return prepared(Backend::Cuda) ? backend(Backend::Cuda).deviceSceneBytes() : 0;
+}
+std::vector<std::pair<std::string, double>> Renderer::deviceBuildSteps() const {
+  return prepared(Backend::Cuda) ? backend(Backend::Cuda).buildSteps()
+                                 : std::vector<std::pair<std::string, double>>{};
+}
+HostAcceleration Renderer::deviceAcceleration() const { return backend(Backend::Cuda).acceleration(); }
+PartitionMetadata Renderer::deviceMetadata() const { return backend(Backend::Cuda).metadata(); }
+
+Frame Renderer::render(const Camera &camera, const RenderSettings &settings) {
+  Frame frame;
+  render(camera, settings, frame);
+  return frame;
+}
+
+void Renderer::render(const Camera &camera, const RenderSettings &settings, Frame &frame) {
+  if (!tf_)
+    throw Error("no transfer function set");
+  const IntegratorSettings &s = settings.integrator;
+  if (!(s.s1 > 0.f) || !(s.s2 >= s.s1) || !(s.p >= 1.f) || !(s.unit > 0.f))
+    throw Error("invalid sampling settings: need s1 > 0, s2 >= s1, p >= 1 and unit > 0");
+  if (settings.width <= 0 || settings.height <= 0)
+    throw Error("invalid image size");
+  prepare(settings.backend);
+  // Every pixel is written below, so buffers of the right size are reused as they are: no allocation, and
+  // no page faults on fresh memory, from one frame to the next.
+  const size_t pixels = size_t(settings.width) * size_t(settings.height);
+  frame.image.width = settings.width;
+  frame.image.height = settings.height;
+  frame.image.rgb.resize(3 * pixels);
+  frame.opacity.resize(settings.keepOpacity ? pixels : 0);
+  frame.samplesPerPixel.resize(settings.keepSamplesPerPixel ? pixels : 0);
+  PixelTarget target;
+  target.rgb = frame.image.rgb.data();
+  target.opacity = settings.keepOpacity ? frame.opacity.data() : nullptr;
+  target.samples = settings.keepSamplesPerPixel ? frame.samplesPerPixel.data() : nullptr;
+  target.width = settings.width;
+  target.background = settings.background;
+  IntegratorSettings derived = s;
+  derived.finestStepSigma = finestStepSigma(s.s1, s.s2, s.p);
+  const SampleTotals samples =
+      backend(settings.backend)
+          .render(makeCameraView(camera, settings.width, settings.height), derived, target, frame.kernelMs);
+  frame.samplesTotal = samples.total;
+  frame.samplesMax = samples.max;
+}
+
+} // namespace uvr

@@ -1,0 +1,111 @@
+// The façade over the backends: one mesh and field, the transfer function, and a backend per processor asked
+// for, each made when first prepared.
+#pragma once
+
+#include "backend/backend.h"
+#include "image/image.h"
+#include "mesh/mesh.h"
+#include "render/camera.h"
+#include "render/integrator.h"
+#include "render/transfer_function.h"
+
+#include <memory>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace uvr {
+
+/// A leaf size that asks for the default (defaultLeafSize).
+constexpr uint32_t kAutoLeafSize = 0;
+
+const char *modeName(RenderMode mode);
+/// Parses reference|skip|adaptive|full; throws uvr::Error otherwise.
+RenderMode parseMode(const std::string &name);
+
+struct RenderSettings {
+  IntegratorSettings integrator;
+  Vec3f background{0.f, 0.f, 0.f};
+  int width = 1024;
+  int height = 1024;
+  Backend backend = Backend::Cpu;
+  /// Per-pixel buffers a frame keeps besides the image (its sample totals are always there): a GPU frame
+  /// copies each one back to the host.
+  bool keepOpacity = true;
+  bool keepSamplesPerPixel = true;
+};
+
+struct Frame {
+  Image image;
+  std::vector<float> opacity; ///< accumulated opacity per pixel, row-major, top row first; or empty
+  std::vector<uint32_t> samplesPerPixel; ///< row-major, top row first; or empty
+  uint64_t samplesTotal = 0;
+  uint32_t samplesMax = 0;
+  double kernelMs = 0.0; ///< the GPU time of the frame's kernels (CUDA), without copies; 0 on the CPU
+};
+
+class Renderer {
+public:
+  /// Renders field `fieldIndex` of `mesh`, which must outlive the renderer, with partitions of up to
+  /// `leafSize` cells (kAutoLeafSize: defaultLeafSize). Nothing is built until a backend is prepared.
+  Renderer(const Mesh &mesh, int fieldIndex, uint32_t leafSize = kAutoLeafSize);
+  ~Renderer();
+
+  /// Replaces the transfer function and recomputes the partitions' metadata on every backend prepared; a
+  /// backend prepared later takes it then. The mesh is not touched.
+  void setTransferFunction(TransferFunction tf);
+
+  /// Makes `backend` unless it exists: builds the acceleration data there (on the GPU for CUDA, after the
+  /// mesh's upload) and hands it the transfer function if one is set. Frame times then exclude it, and
+  /// preparing before setTransferFunction times the backend's own update.
+  void prepare(Backend backend);
+
+  /// Draws a frame on `settings.backend`, which render prepares first where it is not.
+  Frame render(const Camera &camera, const RenderSettings &settings);
+  /// The same into `frame`, whose buffers are reused when their size matches (no allocation per frame).
+  void render(const Camera &camera, const RenderSettings &settings, Frame &frame);
+
+  /// Whether `backend` has been prepared. The reads below that name a backend throw uvr::Error where not.
+  bool prepared(Backend backend) const;
+  uint32_t partitionCount(Backend backend) const;
+  /// Milliseconds the acceleration build for `backend` took (on the GPU for CUDA, the mesh's upload
+  /// excluded).
+  double buildMs(Backend backend) const;
+  /// The CPU backend's partitions and metadata, in place.
+  const Partitions &partitions() const;
+  const PartitionMetadata &metadata() const;
+  /// The CUDA backend's device, memory (the scene alone, and all of it with the frame buffers) and build
+  /// steps; empty and 0 until it has been prepared.
+  std::string deviceName() const;
+  size_t deviceMemoryBytes() const;
+  size_t deviceSceneBytes() const;
+  std::vector<std::pair<std::string, double>> deviceBuildSteps() const;
+  /// What the GPU built, and the metadata it computed, copied back.
+  HostAcceleration deviceAcceleration() const;
+  PartitionMetadata deviceMetadata() const;
+
+  /// The most cells per partition, as given or by default.
+  uint32_t leafSize() const;
+  /// Partitions the current transfer function makes fully transparent (skipped by the skipping modes); 0
+  /// until a backend has taken it.
+  uint32_t transparentPartitions() const { return transparentPartitions_; }
+  /// The current transfer function; throws uvr::Error before the first setTransferFunction.
+  const TransferFunction &transferFunction() const;
+  /// Milliseconds the last setTransferFunction took on the backends prepared.
+  double tfUpdateMs() const { return tfUpdateMs_; }
+
+private:
+  RenderBackend &backend(Backend backend) const; ///< throws where not prepared
+  const class CpuBackend &cpu() const;
+
+  const Mesh &mesh_;
+  MeshView meshView_;
+  uint32_t leafSize_;
+  std::optional<TransferFunction> tf_;
+  uint32_t transparentPartitions_ = 0;
+  double tfUpdateMs_ = 0.0;
+  std::unique_ptr<RenderBackend> backends_[2]; // by Backend
+};
+
+} // namespace uvr
