@@ -8,7 +8,7 @@ Needs Debian's python3-vtk9 and an X display: run it under `xvfb-run -a` on a he
 usage: xvfb-run -a bench/vtk_compare.py UVR OUTDIR [--cases bench/cases.json] [--data ../shared/data] [--quick]
                                         [--only NAME ...]
 
-Conventions matched (see README, "Conventions that differ from ParaView"):
+Conventions matched (see docs/cli.md, "Conventions that differ from ParaView"):
 - Camera: both get the same explicit eye, focal point, view-up and vertical view angle.
 - Transfer function: the preset is stretched over the same scalar range; colours interpolate in the preset's
   colour space (vtkColorTransferFunction); opacity points keep their midpoint and sharpness (vtkPiecewiseFunction).
