@@ -45,9 +45,9 @@ template <typename Storage> struct OccupancyBits {
 using OccupancyGrid = OccupancyBits<HostStorage>;
 
 /// About `voxelsPerCell` voxels per cell over the mesh bounds (a bit each), set where a cell may reach (its
-/// box; for a tet, the part of its box its face planes do not exclude). The default, 16, made `full` frames
-/// 7-12% faster than 4 on the brain meshes (fewer samples near the surface left to a BVH query that finds
-/// nothing), for 2 bytes per cell and a longer build.
+/// box; for a tet, the part of its box its face planes do not exclude). A fine grid leaves fewer samples near
+/// the surface to a BVH query that finds nothing, for 2 bytes per cell and a longer build (the default's
+/// measurements: docs/results/log.md).
 constexpr float kDefaultVoxelsPerCell = 16.f;
 OccupancyGrid buildOccupancyGrid(const MeshView &mesh, float voxelsPerCell = kDefaultVoxelsPerCell);
 

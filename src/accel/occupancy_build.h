@@ -69,7 +69,7 @@ UVR_HOST_DEVICE inline void voxelSpan(float lo, float hi, float origin, float sc
 /// the tet's face planes. A voxel lies beyond plane i when its corner nearest along the normal does; along a
 /// row of voxels in x (voxel x spans [origin.x + x * size.x, + size.x]) that is one linear inequality in x,
 /// which narrows the row's span. Rows go a batch at a time, one plane after the other, so that the compiler
-/// vectorises across rows (2x faster than a row at a time); the loops over a batch stay rolled, since GCC
+/// vectorises across rows; the loops over a batch stay rolled, since GCC
 /// leaves them scalar once it has unrolled them. The terms that depend on y alone are computed once per
 /// batch of rows.
 template <typename SetRow>

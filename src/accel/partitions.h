@@ -60,10 +60,9 @@ using Partitions = PartitionArrays<HostStorage>;
 Partitions buildPartitions(const MeshView &mesh, uint32_t leafSize);
 
 /// The default `leafSize` makes about this many partitions (the median splits make 1-2 times as many leaves),
-/// of at least kSmallestDefaultLeafSize cells. Measured on the brain meshes of 857k to 298M tets, on both
-/// backends (README, "Choosing defaults"): a partition costs more than a few samples (its traversal; on a
-/// GPU a warp waits for its slowest ray's), and much fewer partitions leave the colour variance too coarse
-/// for the step sizes.
+/// of at least kSmallestDefaultLeafSize cells (docs/design.md, "Choosing defaults"): a partition costs more
+/// than a few samples (its traversal; on a GPU a warp waits for its slowest ray's), and much fewer partitions
+/// leave the colour variance too coarse for the step sizes.
 constexpr uint64_t kDefaultPartitions = 256;
 constexpr uint32_t kSmallestDefaultLeafSize = 64;
 

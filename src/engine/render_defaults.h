@@ -13,7 +13,7 @@
 
 namespace uvr {
 
-/// Defaults measured on the brain meshes (README, "Choosing defaults"): s2 = kDefaultS2Factor * s1.
+/// Defaults chosen by measurement (docs/design.md, "Choosing defaults"): s2 = kDefaultS2Factor * s1.
 constexpr float kDefaultS2Factor = 8.f;
 constexpr float kDefaultP = 4.f;
 

@@ -1,5 +1,5 @@
 // Unstructured meshes made from structured volumes: what `uvr gen` builds (methods in tet_mesher.cpp and
-// hex_mesher.cpp, and in the README).
+// hex_mesher.cpp, and in docs/design.md).
 #pragma once
 
 #include "gen/volume.h"

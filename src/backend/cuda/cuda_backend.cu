@@ -47,21 +47,18 @@ namespace {
 constexpr unsigned kRenderBlockThreads = 128;
 
 /// The block's shape for `mode`; `tiles`: for the skipping modes, warps of 8x4 pixels rather than rows of 32.
-/// Marching every ray, warps of 16x2 pixels are fastest (on an H200, side by side: `reference` 3-13 % faster
-/// than in rows). Skipping, the better shape depends on the transfer function: on an H100, `full` 857k with
-/// the binary brain preset 0.79 ms in rows against 0.97 in tiles, with the translucent one 1.67 against
-/// 1.52. CudaBackend::render times both.
+/// Marching every ray, warps of 16x2 pixels are fastest. Skipping, the better shape depends on the transfer
+/// function (how coherent the rays' intervals are), so CudaBackend::render times both.
 dim3 renderBlock(RenderMode mode, bool tiles) {
   if (!skipsSpace(mode))
     return dim3(16, kRenderBlockThreads / 16);
   return tiles ? dim3(8, kRenderBlockThreads / 8) : dim3(32, kRenderBlockThreads / 32);
 }
 
-/// Resident blocks per SM asked of the compiler, which caps registers. 5 blocks, 96 registers (156
-/// unbounded), suit the marching modes: on an H200 `reference` 12-18 % faster than unbounded, for a few
-/// spills to L1. 4 blocks, 128 registers, suit the skipping ones, whose rays carry their tet (RayCell)
-/// without spilling: `full` 857k translucent 2.34-2.37 against 2.47-2.49 ms at 96; `reference` 3-4 % slower
-/// at 128.
+/// Resident blocks per SM asked of the compiler, which caps registers. 5 blocks, 96 registers, suit the
+/// marching modes: more warps in flight outweigh a few spills to L1. 4 blocks, 128 registers, suit the
+/// skipping ones, whose rays carry their tet (RayCell) and would spill it at 96. (Measured in
+/// docs/results/log.md.)
 constexpr int kMarchingBlocksPerSm = 5, kSkippingBlocksPerSm = 4;
 
 template <int BlocksPerSm>
