@@ -10,13 +10,13 @@ namespace uvr {
 
 const char *backendName(Backend backend) { return backend == Backend::Cuda ? "cuda" : "cpu"; }
 
-bool backendBuilt(Backend backend) {
 #ifdef UVR_HAVE_CUDA
-  return true;
+constexpr bool kCudaBuilt = true;
 #else
-  return backend == Backend::Cpu;
+constexpr bool kCudaBuilt = false;
 #endif
-}
+
+bool backendBuilt(Backend backend) { return backend == Backend::Cpu || kCudaBuilt; }
 
 Backend parseBackend(const std::string &name) {
   if (name == "cpu")
