@@ -90,6 +90,7 @@ TEST(BackendsAgree, CudaBuildsTheHostsAccelerationData) {
       if (!haveCudaDevice(renderer))
         GTEST_SKIP() << "no CUDA GPU here; scripts/gpu-check runs this where there is one";
       const HostAcceleration device = renderer.deviceAcceleration();
+      renderer.prepare(Backend::Cpu);
       const Partitions &host = renderer.partitions();
       ASSERT_EQ(device.partitions.count(), host.count()) << "leaf size " << leafSize;
       ASSERT_EQ(device.partitions.nodes.size(), host.nodes.size());

@@ -393,6 +393,7 @@ TEST_P(Integrator, BoundaryCrossingsLeaveTheImageAsItIs) {
   }
   const RenderSettings settings = settingsFor(RenderMode::Skip, 0.013f);
   const CameraView view = makeCameraView(obliqueCamera(), settings.width, settings.height);
+  renderer.prepare(Backend::Cpu);
   ASSERT_TRUE(crossingsApply(view, renderer.partitions().rootBounds));
   std::vector<uint64_t> start, keys;
   findBoundaryCrossings(makeMeshView(mesh, -1), listBoundaryFaces(buildTetNeighbors(mesh)), view, start,
