@@ -2,7 +2,7 @@
 // orientation, sampling).
 #include "core/error.h"
 #include "gen/mesher.h"
-#include "gen/volume.h"
+#include "io/volume_io.h"
 #include "mesh/mesh_stats.h"
 
 #include <gtest/gtest.h>
