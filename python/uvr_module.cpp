@@ -3,6 +3,7 @@
 #include "core/error.h"
 #include "core/timer.h"
 #include "image/image.h"
+#include "io/color_map_io.h"
 #include "io/mesh_io.h"
 #include "mesh/mesh_stats.h"
 #include "render/render_defaults.h"

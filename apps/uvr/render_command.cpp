@@ -4,6 +4,7 @@
 #include "core/error.h"
 #include "core/timer.h"
 #include "image/image.h"
+#include "io/color_map_io.h"
 #include "render/render_defaults.h"
 #include "render/renderer.h"
 

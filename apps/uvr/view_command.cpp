@@ -2,6 +2,7 @@
 #include "render_options.h"
 
 #include "core/error.h"
+#include "io/color_map_io.h"
 #include "render/render_defaults.h"
 
 #ifdef UVR_HAS_VIEWER

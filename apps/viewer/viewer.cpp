@@ -7,6 +7,7 @@
 
 #include "core/error.h"
 #include "image/image.h"
+#include "io/color_map_io.h"
 #include "render/render_defaults.h"
 
 #include <GLFW/glfw3.h>
