@@ -5,6 +5,7 @@
 #include "engine/render_defaults.h"
 #include "engine/renderer.h"
 #include "image/image.h"
+#include "io/color_map_io.h"
 #include "io/mesh_io.h"
 #include "mesh/mesh_stats.h"
 

@@ -3,6 +3,7 @@
 #include "render/color_map.h"
 
 #include "core/error.h"
+#include "io/color_map_io.h"
 
 #include <gtest/gtest.h>
 

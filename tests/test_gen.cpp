@@ -2,7 +2,7 @@
 // orientation, sampling).
 #include "core/error.h"
 #include "gen/mesher.h"
-#include "gen/volume.h"
+#include "io/volume_io.h"
 #include "mesh/mesh_stats.h"
 
 #include <gtest/gtest.h>
@@ -36,7 +36,7 @@ struct NiftiHeader {
 };
 
 std::vector<uint8_t> niftiBytes(const NiftiHeader &h, const std::vector<uint8_t> &voxels) {
-  std::vector<uint8_t> bytes(352, 0);
+  std::vector<uint8_t> bytes(352 + voxels.size(), 0);
   auto put = [&](int offset, auto value) { std::memcpy(bytes.data() + offset, &value, sizeof(value)); };
   put(0, int32_t(348));
   put(40, int16_t(3));
@@ -60,7 +60,7 @@ std::vector<uint8_t> niftiBytes(const NiftiHeader &h, const std::vector<uint8_t>
       put(280 + 16 * a + 4 * c, h.srow[a][c]);
   }
   std::memcpy(bytes.data() + 344, "n+1", 4);
-  bytes.insert(bytes.end(), voxels.begin(), voxels.end());
+  std::copy(voxels.begin(), voxels.end(), bytes.begin() + 352);
   return bytes;
 }
 

@@ -4,6 +4,7 @@
 #include "core/timer.h"
 #include "gen/mesher.h"
 #include "io/mesh_io.h"
+#include "io/volume_io.h"
 
 #include <tbb/info.h>
 

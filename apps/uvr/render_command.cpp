@@ -6,6 +6,7 @@
 #include "engine/render_defaults.h"
 #include "engine/renderer.h"
 #include "image/image.h"
+#include "io/color_map_io.h"
 
 #include <nlohmann/json.hpp>
 

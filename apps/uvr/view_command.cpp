@@ -3,6 +3,7 @@
 
 #include "core/error.h"
 #include "engine/render_defaults.h"
+#include "io/color_map_io.h"
 
 #ifdef UVR_HAS_VIEWER
 #include "viewer.h"

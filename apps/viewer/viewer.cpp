@@ -8,6 +8,7 @@
 #include "core/error.h"
 #include "engine/render_defaults.h"
 #include "image/image.h"
+#include "io/color_map_io.h"
 
 #include <GLFW/glfw3.h>
 #include <backends/imgui_impl_glfw.h>

@@ -10,12 +10,13 @@
 
 #if UVR_HAVE_NETCDF
 
+#include "io/text_scan.h"
+
 #include <netcdf.h>
 
 #include <algorithm>
 #include <cctype>
 #include <cerrno>
-#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -30,9 +31,8 @@ namespace uvr {
 namespace {
 
 /// An Exodus element type name without its node-count suffix ("HEX27" -> "HEX"), upper case.
-std::string baseTypeName(std::string name) {
-  for (char &c : name)
-    c = char(std::toupper(static_cast<unsigned char>(c)));
+std::string baseTypeName(const std::string &type) {
+  std::string name = toUpper(type);
   while (!name.empty() && (std::isdigit(static_cast<unsigned char>(name.back())) || name.back() == ' '))
     name.pop_back();
   return name;
@@ -226,8 +226,7 @@ public:
     std::vector<uint64_t> blocks;
     for (const std::string &name : variableNames_) {
       uint64_t b = 0;
-      auto [end, ec] = std::from_chars(name.data() + 7, name.data() + name.size(), b);
-      if (name.starts_with("connect") && ec == std::errc() && end == name.data() + name.size() && b >= 1 &&
+      if (name.starts_with("connect") && parseNumber(std::string_view(name).substr(7), b) && b >= 1 &&
           b <= blockCount)
         blocks.push_back(b);
     }

@@ -7,15 +7,14 @@
 // them. $NodeData and $ElementData become point and cell fields, at the time step asked for.
 #include "core/error.h"
 #include "core/progress.h"
+#include "io/binary.h"
 #include "io/file_buffer.h"
 #include "io/mesh_io.h"
+#include "io/text_scan.h"
 
 #include <algorithm>
-#include <bit>
-#include <charconv>
 #include <cmath>
 #include <cstdio>
-#include <cstring>
 #include <map>
 #include <string_view>
 
@@ -215,11 +214,7 @@ private:
   uint64_t here() const { return uint64_t(p_ - begin_); }
   uint64_t remaining() const { return uint64_t(end_ - p_); }
 
-  static bool isSpace(char c) { return c == ' ' || c == '\n' || c == '\r' || c == '\t'; }
-  void skipSpace() {
-    while (p_ != end_ && isSpace(*p_))
-      ++p_;
-  }
+  void skipSpace() { p_ = uvr::skipSpace(p_, end_); }
   std::string_view peekToken() const {
     const char *e = p_;
     while (e != end_ && !isSpace(*e) && e - p_ < 40)
@@ -244,14 +239,11 @@ private:
     skipSpace();
     if (p_ == end_)
       fail(here(), std::string("the file ends before ") + what);
-    const char *tokenEnd = p_;
-    while (tokenEnd != end_ && !isSpace(*tokenEnd))
-      ++tokenEnd;
+    const char *stop = tokenEnd(p_, end_);
     T value{};
-    auto [stop, ec] = std::from_chars(p_, tokenEnd, value);
-    if (ec != std::errc() || stop != tokenEnd)
+    if (!parseNumber(p_, stop, value))
       fail(here(), std::string("expected ") + what + ", got '" + std::string(peekToken()) + "'");
-    p_ = tokenEnd;
+    p_ = stop;
     return value;
   }
 
@@ -259,14 +251,7 @@ private:
   template <typename T> T binary(const char *what) {
     if (remaining() < sizeof(T))
       fail(here(), std::string("the file ends before ") + what);
-    T value;
-    std::memcpy(&value, p_, sizeof(T));
-    if (swap_) {
-      uint8_t bytes[sizeof(T)];
-      std::memcpy(bytes, &value, sizeof(T));
-      std::reverse(bytes, bytes + sizeof(T));
-      std::memcpy(&value, bytes, sizeof(T));
-    }
+    const T value = loadValue<T>(p_, swap_);
     p_ += sizeof(T);
     return value;
   }
@@ -325,7 +310,7 @@ private:
       const uint64_t at = here();
       const int32_t one = binary<int32_t>("the byte-order mark");
       if (one != 1) {
-        if (__builtin_bswap32(uint32_t(one)) != 1)
+        if (byteSwapped(one) != 1)
           fail(at, "the byte-order mark is " + std::to_string(one) + ", expected 1");
         swap_ = true;
       }

@@ -1,5 +1,6 @@
 #include "core/error.h"
 #include "io/mesh_io.h"
+#include "io/text_scan.h"
 
 #include <pugixml.hpp>
 
@@ -20,10 +21,7 @@ std::string lowerCaseExtension(const std::string &path) {
   const size_t dot = path.find_last_of('.');
   if (dot == std::string::npos || (slash != std::string::npos && dot < slash))
     return "";
-  std::string extension = path.substr(dot);
-  std::transform(extension.begin(), extension.end(), extension.begin(),
-                 [](unsigned char c) { return char(std::tolower(c)); });
-  return extension;
+  return toLower(std::string_view(path).substr(dot));
 }
 
 bool isExodus(const std::string &extension) {

@@ -5,15 +5,12 @@
 #include "core/error.h"
 #include "io/file_buffer.h"
 #include "io/mesh_io.h"
+#include "io/scalar_type.h"
 
 #include <algorithm>
-#include <array>
-#include <bit>
-#include <cerrno>
 #include <charconv>
 #include <cmath>
 #include <cstring>
-#include <memory>
 #include <optional>
 #include <string_view>
 
@@ -21,19 +18,13 @@ namespace uvr {
 
 namespace {
 
-bool isSpace(char c) { return c == ' ' || c == '\n' || c == '\r' || c == '\t'; }
-
-std::string upper(std::string_view s) {
-  std::string result(s);
-  for (char &c : result)
-    c = char(std::toupper(static_cast<unsigned char>(c)));
-  return result;
-}
-
 std::string join(const std::vector<std::string_view> &tokens) {
   std::string text;
-  for (std::string_view token : tokens)
-    text += (text.empty() ? "" : " ") + std::string(token);
+  for (std::string_view token : tokens) {
+    if (!text.empty())
+      text += ' ';
+    text += token;
+  }
   return text.size() > 80 ? text.substr(0, 80) + "..." : text;
 }
 
@@ -53,105 +44,64 @@ std::string decodeName(std::string_view name) {
   return result;
 }
 
-enum class DataType : uint8_t {
-  Bit,
-  Int8,
-  UInt8,
-  Int16,
-  UInt16,
-  Int32,
-  UInt32,
-  Int64,
-  UInt64,
-  Float32,
-  Float64,
-  String
+/// A data type of the format: packed numbers of a ScalarType, bits (packed 8 to a byte, the first in the
+/// highest bit) or strings.
+struct DataType {
+  enum class Kind : uint8_t { Number, Bit, String };
+  Kind kind = Kind::Number;
+  /// The packed numbers' type; UInt8 for bits (whose text is integers).
+  ScalarType number = ScalarType::UInt8;
+
+  bool isString() const { return kind == Kind::String; }
+  /// Whether its values are integers: all but the floating types (bits and strings too).
+  bool isInteger() const { return kind != Kind::Number || uvr::isInteger(number); }
 };
+
+constexpr DataType numeric(ScalarType type) { return {DataType::Kind::Number, type}; }
 
 std::optional<DataType> parseDataType(std::string_view name) {
   static constexpr std::pair<std::string_view, DataType> names[] = {
-      {"BIT", DataType::Bit},
-      {"CHAR", DataType::Int8},
-      {"SIGNED_CHAR", DataType::Int8},
-      {"UNSIGNED_CHAR", DataType::UInt8},
-      {"SHORT", DataType::Int16},
-      {"UNSIGNED_SHORT", DataType::UInt16},
-      {"INT", DataType::Int32},
-      {"UNSIGNED_INT", DataType::UInt32},
-      {"LONG", DataType::Int64}, // VTK writes sizeof(long): 8 bytes on the LP64 systems we run on
-      {"UNSIGNED_LONG", DataType::UInt64},
-      {"VTKIDTYPE", DataType::Int32}, // written as int, as VTK's reader expects
-      {"VTKTYPEINT8", DataType::Int8},
-      {"VTKTYPEUINT8", DataType::UInt8},
-      {"VTKTYPEINT16", DataType::Int16},
-      {"VTKTYPEUINT16", DataType::UInt16},
-      {"VTKTYPEINT32", DataType::Int32},
-      {"VTKTYPEUINT32", DataType::UInt32},
-      {"VTKTYPEINT64", DataType::Int64},
-      {"VTKTYPEUINT64", DataType::UInt64},
-      {"FLOAT", DataType::Float32},
-      {"VTKTYPEFLOAT32", DataType::Float32},
-      {"DOUBLE", DataType::Float64},
-      {"VTKTYPEFLOAT64", DataType::Float64},
-      {"STRING", DataType::String},
-      {"UTF8_STRING", DataType::String},
+      {"BIT", {DataType::Kind::Bit, ScalarType::UInt8}},
+      {"CHAR", numeric(ScalarType::Int8)},
+      {"SIGNED_CHAR", numeric(ScalarType::Int8)},
+      {"UNSIGNED_CHAR", numeric(ScalarType::UInt8)},
+      {"SHORT", numeric(ScalarType::Int16)},
+      {"UNSIGNED_SHORT", numeric(ScalarType::UInt16)},
+      {"INT", numeric(ScalarType::Int32)},
+      {"UNSIGNED_INT", numeric(ScalarType::UInt32)},
+      {"LONG", numeric(ScalarType::Int64)}, // VTK writes sizeof(long): 8 bytes on the LP64 systems we run on
+      {"UNSIGNED_LONG", numeric(ScalarType::UInt64)},
+      {"VTKIDTYPE", numeric(ScalarType::Int32)}, // written as int, as VTK's reader expects
+      {"VTKTYPEINT8", numeric(ScalarType::Int8)},
+      {"VTKTYPEUINT8", numeric(ScalarType::UInt8)},
+      {"VTKTYPEINT16", numeric(ScalarType::Int16)},
+      {"VTKTYPEUINT16", numeric(ScalarType::UInt16)},
+      {"VTKTYPEINT32", numeric(ScalarType::Int32)},
+      {"VTKTYPEUINT32", numeric(ScalarType::UInt32)},
+      {"VTKTYPEINT64", numeric(ScalarType::Int64)},
+      {"VTKTYPEUINT64", numeric(ScalarType::UInt64)},
+      {"FLOAT", numeric(ScalarType::Float32)},
+      {"VTKTYPEFLOAT32", numeric(ScalarType::Float32)},
+      {"DOUBLE", numeric(ScalarType::Float64)},
+      {"VTKTYPEFLOAT64", numeric(ScalarType::Float64)},
+      {"STRING", {DataType::Kind::String, ScalarType::UInt8}},
+      {"UTF8_STRING", {DataType::Kind::String, ScalarType::UInt8}},
   };
-  std::string key = upper(name);
+  std::string key = toUpper(name);
   for (auto [text, type] : names)
     if (text == key)
       return type;
   return std::nullopt;
 }
 
-bool isInteger(DataType type) { return type != DataType::Float32 && type != DataType::Float64; }
-
-/// Calls `f` with a zero of the C++ type that a numeric `type` stores (bits as uint8_t).
-template <typename F> decltype(auto) visitType(DataType type, F &&f) {
-  switch (type) {
-  case DataType::Int8:
-    return f(int8_t{});
-  case DataType::Int16:
-    return f(int16_t{});
-  case DataType::UInt16:
-    return f(uint16_t{});
-  case DataType::Int32:
-    return f(int32_t{});
-  case DataType::UInt32:
-    return f(uint32_t{});
-  case DataType::Int64:
-    return f(int64_t{});
-  case DataType::UInt64:
-    return f(uint64_t{});
-  case DataType::Float32:
-    return f(float{});
-  case DataType::Float64:
-    return f(double{});
-  default:
-    break;
-  }
-  return f(uint8_t{});
-}
-
 /// Bytes that `count` binary values of `type` take (strings: at least that many).
 uint64_t binaryBytes(DataType type, uint64_t count) {
-  if (type == DataType::Bit)
+  if (type.kind == DataType::Kind::Bit)
     return count / 8 + (count % 8 != 0);
-  if (type == DataType::String)
+  if (type.isString())
     return count;
-  return visitType(type, [&](auto zero) {
-    uint64_t bytes = 0;
-    return __builtin_mul_overflow(count, sizeof(zero), &bytes) ? UINT64_MAX : bytes;
-  });
-}
-
-template <typename T> T fromBigEndian(T value) {
-  if constexpr (std::endian::native == std::endian::little) {
-    std::array<char, sizeof(T)> bytes;
-    std::memcpy(bytes.data(), &value, sizeof(T));
-    std::reverse(bytes.begin(), bytes.end());
-    std::memcpy(&value, bytes.data(), sizeof(T));
-  }
-  return value;
+  uint64_t bytes = 0;
+  return __builtin_mul_overflow(count, scalarSize(type.number), &bytes) ? UINT64_MAX : bytes;
 }
 
 using Line = std::vector<std::string_view>;
@@ -163,17 +113,17 @@ public:
 
   UnstructuredGrid read() {
     std::string_view version = rawLine();
-    if (upper(version.substr(0, 14)) != "# VTK DATAFILE")
+    if (toUpper(version.substr(0, 14)) != "# VTK DATAFILE")
       failLine("expected '# vtk DataFile Version x.x', got '" + std::string(version.substr(0, 40)) + "'");
     rawLine(); // the title
     Line format = readLine();
-    if (format.size() != 1 || (upper(format[0]) != "ASCII" && upper(format[0]) != "BINARY"))
+    if (format.size() != 1 || (toUpper(format[0]) != "ASCII" && toUpper(format[0]) != "BINARY"))
       failLine("expected 'ASCII' or 'BINARY', got '" + join(format) + "'");
-    binary_ = upper(format[0]) == "BINARY";
+    binary_ = toUpper(format[0]) == "BINARY";
     Line dataset = readLine();
-    if (dataset.size() != 2 || upper(dataset[0]) != "DATASET")
+    if (dataset.size() != 2 || toUpper(dataset[0]) != "DATASET")
       failLine("expected 'DATASET UNSTRUCTURED_GRID', got '" + join(dataset) + "'");
-    if (upper(dataset[1]) != "UNSTRUCTURED_GRID")
+    if (toUpper(dataset[1]) != "UNSTRUCTURED_GRID")
       failLine("unsupported dataset type '" + std::string(dataset[1]) + "' (expected UNSTRUCTURED_GRID)");
 
     grid_.offsets.assign(1, 0);
@@ -218,17 +168,7 @@ private:
   Line readLine() {
     while (pos_ < end_) {
       std::string_view text = rawLine();
-      Line tokens;
-      size_t i = 0;
-      while (i < text.size()) {
-        while (i < text.size() && isSpace(text[i]))
-          ++i;
-        size_t start = i;
-        while (i < text.size() && !isSpace(text[i]))
-          ++i;
-        if (i > start)
-          tokens.push_back(text.substr(start, i - start));
-      }
+      Line tokens = splitTokens(text);
       if (!tokens.empty())
         return tokens;
     }
@@ -237,10 +177,8 @@ private:
 
   /// Whether the next non-blank line starts with `keyword` (any case); reads nothing.
   bool nextLineStartsWith(std::string_view keyword) const {
-    const char *p = pos_;
-    while (p < end_ && isSpace(*p))
-      ++p;
-    if (uint64_t(end_ - p) < keyword.size() || upper(std::string_view(p, keyword.size())) != keyword)
+    const char *p = skipSpace(pos_, end_);
+    if (uint64_t(end_ - p) < keyword.size() || toUpper(std::string_view(p, keyword.size())) != keyword)
       return false;
     p += keyword.size();
     return p == end_ || isSpace(*p);
@@ -248,19 +186,16 @@ private:
 
   /// The next whitespace-separated value of ASCII data; empty at the end of the file.
   std::string_view valueToken() {
-    while (pos_ < end_ && isSpace(*pos_))
-      line_ += *pos_++ == '\n';
-    tokenStart_ = pos_;
+    tokenStart_ = skipSpace(pos_, end_);
+    line_ += uint64_t(std::count(pos_, tokenStart_, '\n'));
     tokenLine_ = line_;
-    while (pos_ < end_ && !isSpace(*pos_))
-      ++pos_;
+    pos_ = tokenEnd(tokenStart_, end_);
     return {tokenStart_, size_t(pos_ - tokenStart_)};
   }
 
   uint64_t count(std::string_view token, const Line &line, const char *expected) const {
     uint64_t value = 0;
-    auto [end, ec] = std::from_chars(token.data(), token.data() + token.size(), value);
-    if (ec != std::errc() || end != token.data() + token.size())
+    if (!parseNumber(token, value))
       failLine(std::string("expected '") + expected + "', got '" + join(line) + "'");
     return value;
   }
@@ -291,24 +226,17 @@ private:
 
   /// Reads `count` numeric values of `type` into out, converted to T.
   template <typename T> void readInto(DataType type, uint64_t count, T *out) {
-    if (type == DataType::String)
+    if (type.isString())
       failLine("expected numbers, got a string array");
     checkRoom(type, count);
     if (binary_) {
       sawBinary_ = true;
       auto bytes = reinterpret_cast<const uint8_t *>(pos_);
-      if (type == DataType::Bit) {
+      if (type.kind == DataType::Kind::Bit) {
         for (uint64_t i = 0; i < count; ++i)
           out[i] = T((bytes[i / 8] >> (7 - i % 8)) & 1);
       } else {
-        visitType(type, [&](auto zero) {
-          using Src = decltype(zero);
-          for (uint64_t i = 0; i < count; ++i) {
-            Src value;
-            std::memcpy(&value, bytes + i * sizeof(Src), sizeof(Src));
-            out[i] = static_cast<T>(fromBigEndian(value));
-          }
-        });
+        convertPacked(type.number, kSwapBigEndian, bytes, count, out);
       }
       pos_ += binaryBytes(type, count);
       return;
@@ -317,22 +245,7 @@ private:
       std::string_view token = valueToken();
       if (token.empty())
         failToken("expected " + std::to_string(count) + " values, the file ends after " + std::to_string(i));
-      const char *first = token.data(), *last = first + token.size();
-      std::from_chars_result parsed{};
-      if (!isInteger(type)) {
-        double value = 0;
-        parsed = std::from_chars(first, last, value);
-        out[i] = static_cast<T>(value);
-      } else if (type == DataType::UInt64) {
-        uint64_t value = 0;
-        parsed = std::from_chars(first, last, value);
-        out[i] = static_cast<T>(value);
-      } else {
-        int64_t value = 0;
-        parsed = std::from_chars(first, last, value);
-        out[i] = static_cast<T>(value);
-      }
-      if (parsed.ec != std::errc() || parsed.ptr != last)
+      if (!parseScalar(type.number, token.data(), token.data() + token.size(), out[i]))
         failToken("invalid number '" + std::string(token.substr(0, 40)) + "'");
     }
   }
@@ -347,7 +260,7 @@ private:
 
   void skipValues(DataType type, uint64_t count) {
     checkRoom(type, count);
-    if (type != DataType::String) {
+    if (!type.isString()) {
       if (binary_) {
         sawBinary_ = true;
         pos_ += binaryBytes(type, count);
@@ -385,7 +298,7 @@ private:
   // Sections.
 
   void readSection(const Line &line) {
-    std::string keyword = upper(line[0]);
+    std::string keyword = toUpper(line[0]);
     if (keyword == "POINTS")
       readPoints(line);
     else if (keyword == "CELLS")
@@ -441,19 +354,19 @@ private:
     if (next.size() != 2)
       failLine("expected 'OFFSETS type', got '" + join(next) + "'");
     DataType offsetType = dataType(next[1]);
-    if (!isInteger(offsetType))
+    if (!offsetType.isInteger())
       failLine("expected an integer type for OFFSETS");
     std::vector<int64_t> offsets = readValues<std::vector<int64_t>>(offsetType, first);
     std::string offsetsWhere = where(lineStart_, lineNumber_);
     Line connectivity = readLine();
-    if (!connectivity.empty() && upper(connectivity[0]) == "METADATA") {
+    if (!connectivity.empty() && toUpper(connectivity[0]) == "METADATA") {
       skipMetadata();
       connectivity = readLine();
     }
-    if (connectivity.size() != 2 || upper(connectivity[0]) != "CONNECTIVITY")
+    if (connectivity.size() != 2 || toUpper(connectivity[0]) != "CONNECTIVITY")
       failLine("expected 'CONNECTIVITY type', got '" + join(connectivity) + "'");
     DataType connectivityType = dataType(connectivity[1]);
-    if (!isInteger(connectivityType))
+    if (!connectivityType.isInteger())
       failLine("expected an integer type for CONNECTIVITY");
     grid_.connectivity = readValues<std::vector<int64_t>>(connectivityType, second);
 
@@ -472,7 +385,7 @@ private:
 
   /// The layout before VTK 5.1: each cell is its vertex count followed by its vertices.
   void readCellList(uint64_t cells, uint64_t size) {
-    std::vector<int64_t> list = readValues<std::vector<int64_t>>(DataType::Int32, size);
+    std::vector<int64_t> list = readValues<std::vector<int64_t>>(numeric(ScalarType::Int32), size);
     if (cells > size)
       failAt(cellsWhere_, std::to_string(cells) + " cells cannot fit in " + std::to_string(size) + " values");
     grid_.offsets.assign(1, 0);
@@ -501,7 +414,7 @@ private:
       failLine("a second CELL_TYPES section");
     typesWhere_ = where(lineStart_, lineNumber_);
     uint64_t n = count(line[1], line, "CELL_TYPES n");
-    std::vector<int64_t> codes = readValues<std::vector<int64_t>>(DataType::Int32, n);
+    std::vector<int64_t> codes = readValues<std::vector<int64_t>>(numeric(ScalarType::Int32), n);
     grid_.types.resize(n);
     for (uint64_t i = 0; i < n; ++i) {
       if (codes[i] < 0 || codes[i] > 255)
@@ -518,7 +431,7 @@ private:
       std::string_view text = rawLine();
       if (text.find_first_not_of(" \t") == std::string_view::npos)
         return;
-      if (upper(text.substr(0, 15)) == "COMPONENT_NAMES")
+      if (toUpper(text.substr(0, 15)) == "COMPONENT_NAMES")
         for (uint64_t i = 0; i < lastComponents_ && pos_ < end_; ++i)
           rawLine();
     }
@@ -565,11 +478,11 @@ private:
       // Colors are not a quantity to render: skipped. Binary files store them as bytes, text as floats.
       expectTokens(3, 3, "COLOR_SCALARS name nValues");
       uint64_t values = product(tuples_, count(line[2], line, "COLOR_SCALARS name nValues"));
-      skipValues(binary_ ? DataType::UInt8 : DataType::Float32, values);
+      skipValues(numeric(binary_ ? ScalarType::UInt8 : ScalarType::Float32), values);
     } else if (keyword == "LOOKUP_TABLE") {
       expectTokens(3, 3, "LOOKUP_TABLE name size");
       uint64_t values = product(count(line[2], line, "LOOKUP_TABLE name size"), 4);
-      skipValues(binary_ ? DataType::UInt8 : DataType::Float32, values);
+      skipValues(numeric(binary_ ? ScalarType::UInt8 : ScalarType::Float32), values);
     } else if (keyword == "FIELD") {
       readField(line, true);
     } else {
@@ -588,19 +501,19 @@ private:
       if (header.empty())
         failLine("expected " + std::to_string(arrays) + " FIELD arrays, the file ends after " +
                  std::to_string(i));
-      if (header.size() == 1 && upper(header[0]) == "METADATA") {
+      if (header.size() == 1 && toUpper(header[0]) == "METADATA") {
         skipMetadata();
         continue;
       }
       ++i;
-      if (header.size() == 1 && upper(header[0]) == "NULL_ARRAY")
+      if (header.size() == 1 && toUpper(header[0]) == "NULL_ARRAY")
         continue;
       if (header.size() != 4)
         failLine("expected 'arrayName numComponents numTuples type', got '" + join(header) + "'");
       uint64_t components = count(header[1], header, "arrayName numComponents numTuples type");
       uint64_t tuples = count(header[2], header, "arrayName numComponents numTuples type");
       DataType type = dataType(header[3]);
-      if (!keep || type == DataType::String) {
+      if (!keep || type.isString()) {
         skipValues(type, product(components, tuples));
       } else {
         if (tuples != tuples_)
@@ -617,7 +530,7 @@ private:
   void readArray(std::string name, DataType type, uint64_t components) {
     lastComponents_ = components;
     uint64_t values = product(tuples_, components);
-    if (type == DataType::String) {
+    if (type.isString()) {
       skipValues(type, values);
       return;
     }

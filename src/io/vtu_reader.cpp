@@ -6,6 +6,7 @@
 #include "core/error.h"
 #include "io/file_buffer.h"
 #include "io/mesh_io.h"
+#include "io/scalar_type.h"
 
 #ifdef UVR_HAVE_LIBDEFLATE
 #include <libdeflate.h>
@@ -21,8 +22,6 @@
 #include <array>
 #include <atomic>
 #include <bit>
-#include <cerrno>
-#include <charconv>
 #include <cmath>
 #include <cstring>
 #include <memory>
@@ -37,29 +36,6 @@ bool multiplyOverflows(uint64_t a, uint64_t b, uint64_t &product) {
   return __builtin_mul_overflow(a, b, &product);
 }
 
-bool isSpace(char c) { return c == ' ' || c == '\n' || c == '\r' || c == '\t'; }
-
-std::string_view trim(std::string_view s) {
-  while (!s.empty() && isSpace(s.front()))
-    s.remove_prefix(1);
-  while (!s.empty() && isSpace(s.back()))
-    s.remove_suffix(1);
-  return s;
-}
-
-enum class ScalarType : uint8_t {
-  Int8,
-  UInt8,
-  Int16,
-  UInt16,
-  Int32,
-  UInt32,
-  Int64,
-  UInt64,
-  Float32,
-  Float64
-};
-
 struct ScalarTypeName {
   std::string_view name;
   ScalarType type;
@@ -71,58 +47,6 @@ constexpr ScalarTypeName scalarTypeNames[] = {
     {"Int64", ScalarType::Int64},     {"UInt64", ScalarType::UInt64}, {"Float32", ScalarType::Float32},
     {"Float64", ScalarType::Float64},
 };
-
-/// Calls `f` with a zero of the C++ type that `type` names.
-template <typename F> decltype(auto) visitType(ScalarType type, F &&f) {
-  switch (type) {
-  case ScalarType::Int8:
-    return f(int8_t{});
-  case ScalarType::UInt8:
-    return f(uint8_t{});
-  case ScalarType::Int16:
-    return f(int16_t{});
-  case ScalarType::UInt16:
-    return f(uint16_t{});
-  case ScalarType::Int32:
-    return f(int32_t{});
-  case ScalarType::UInt32:
-    return f(uint32_t{});
-  case ScalarType::Int64:
-    return f(int64_t{});
-  case ScalarType::UInt64:
-    return f(uint64_t{});
-  case ScalarType::Float32:
-    return f(float{});
-  case ScalarType::Float64:
-    break;
-  }
-  return f(double{});
-}
-
-uint64_t sizeOf(ScalarType type) {
-  return visitType(type, [](auto zero) { return uint64_t(sizeof(zero)); });
-}
-
-bool isInteger(ScalarType type) { return type != ScalarType::Float32 && type != ScalarType::Float64; }
-
-template <typename T> constexpr ScalarType scalarTypeOf() {
-  if constexpr (std::is_same_v<T, float>)
-    return ScalarType::Float32;
-  else if constexpr (std::is_same_v<T, double>)
-    return ScalarType::Float64;
-  else if constexpr (std::is_same_v<T, int64_t>)
-    return ScalarType::Int64;
-  else
-    return ScalarType::UInt8;
-}
-
-template <typename T> T byteSwapped(T value) {
-  std::array<uint8_t, sizeof(T)> bytes;
-  std::memcpy(bytes.data(), &value, sizeof(T));
-  std::reverse(bytes.begin(), bytes.end());
-  std::memcpy(&value, bytes.data(), sizeof(T));
-  return value;
-}
 
 /// Runs f(begin, end) over [0, n) in parallel chunks.
 template <typename F> void parallelChunks(uint64_t n, F &&f) {
@@ -142,11 +66,6 @@ template <typename Pred> uint64_t findFirst(uint64_t n, Pred &&bad) {
       },
       [](uint64_t a, uint64_t b) { return std::min(a, b); });
 }
-
-/// How values become the Dst that a reader stores: as C++ converts them.
-template <typename Dst> struct CastTo {
-  template <typename Value> Dst operator()(Value value) const { return static_cast<Dst>(value); }
-};
 
 /// Point indices narrowed to 32 bits as they are read (for at most 2^32 - 1 points), to be written and read
 /// again in half the memory. An index outside [0, pointCount), as VTK's 64-bit value, becomes kOutside.
@@ -182,20 +101,6 @@ public:
 private:
   std::atomic<uint64_t> least_;
 };
-
-/// Converts `count` packed values of `type` (byte-swapped when `swap`) to Dst by `to`.
-template <typename Dst, typename To>
-void convert(ScalarType type, bool swap, const uint8_t *src, uint64_t count, Dst *dst, const To &to) {
-  visitType(type, [&](auto zero) {
-    using Src = decltype(zero);
-    const To local = to; // whose members no write to dst can change: the loop need not load them again
-    for (uint64_t i = 0; i < count; ++i) {
-      Src value;
-      std::memcpy(&value, src + i * sizeof(Src), sizeof(Src));
-      dst[i] = local(swap ? byteSwapped(value) : value);
-    }
-  });
-}
 
 constexpr uint8_t base64Pad = 64, base64Space = 65, base64Invalid = 255;
 
@@ -494,8 +399,7 @@ private:
   uint64_t countAttribute(pugi::xml_node node, const char *name) const {
     std::string_view text = trim(node.attribute(name).value());
     uint64_t value = 0;
-    auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
-    if (text.empty() || ec != std::errc() || end != text.data() + text.size())
+    if (!parseNumber(text, value))
       fail(position(node), std::string("expected a non-negative integer ") + name + "=\"...\" on <" +
                                node.name() + ">, got '" + node.attribute(name).value() + "'");
     return value;
@@ -567,16 +471,7 @@ private:
     auto word = [&] {
       uint8_t raw[8];
       readOrFail(raw, uint64_t(headerBytes_));
-      if (swap_)
-        std::reverse(raw, raw + headerBytes_);
-      if (headerBytes_ == 4) {
-        uint32_t value;
-        std::memcpy(&value, raw, 4);
-        return uint64_t(value);
-      }
-      uint64_t value;
-      std::memcpy(&value, raw, 8);
-      return value;
+      return headerBytes_ == 4 ? uint64_t(loadValue<uint32_t>(raw, swap_)) : loadValue<uint64_t>(raw, swap_);
     };
 
     Payload payload;
@@ -703,32 +598,16 @@ private:
   template <typename T, typename To>
   void parseAscii(const ArrayInfo &array, uint64_t count, T *out, const To &to) const {
     const char *p = array.text.data(), *end = p + array.text.size();
-    auto skipSpace = [&] {
-      while (p != end && isSpace(*p))
-        ++p;
-    };
     for (uint64_t i = 0; i < count; ++i) {
-      skipSpace();
+      p = skipSpace(p, end);
       if (p == end)
         fail(array, position(p), "holds " + std::to_string(i) + " values, expected " + std::to_string(count));
-      const char *tokenEnd = p;
-      while (tokenEnd != end && !isSpace(*tokenEnd))
-        ++tokenEnd;
-      bool ok = visitType(array.type, [&](auto zero) {
-        using Parsed = std::conditional_t<
-            std::is_floating_point_v<decltype(zero)>, double,
-            std::conditional_t<std::is_same_v<decltype(zero), uint64_t>, uint64_t, int64_t>>;
-        Parsed value{};
-        auto [stop, ec] = std::from_chars(p, tokenEnd, value);
-        out[i] = to(value);
-        return ec == std::errc() && stop == tokenEnd;
-      });
-      if (!ok)
-        fail(array, position(p),
-             "invalid number '" + std::string(p, std::min<size_t>(tokenEnd - p, 40)) + "'");
-      p = tokenEnd;
+      const char *stop = tokenEnd(p, end);
+      if (!parseScalar(array.type, p, stop, out[i], to))
+        fail(array, position(p), "invalid number '" + std::string(p, std::min<size_t>(stop - p, 40)) + "'");
+      p = stop;
     }
-    skipSpace();
+    p = skipSpace(p, end);
     if (p != end)
       fail(array, position(p), "holds more than the expected " + std::to_string(count) + " values");
   }
@@ -742,7 +621,7 @@ private:
       return {};
     }
     uint64_t bytes = 0;
-    if (multiplyOverflows(count, sizeOf(array.type), bytes))
+    if (multiplyOverflows(count, scalarSize(array.type), bytes))
       fail(array, array.position, "expected value count overflows");
     return locate(array, bytes);
   }
@@ -765,8 +644,8 @@ private:
         return findFirst(count, [&](uint64_t i) { return bad(out[i]); });
     }
     LeastIndex firstBad(count);
-    forEachRun(array, payload, sizeOf(array.type), [&](const uint8_t *bytes, uint64_t first, uint64_t n) {
-      convert(array.type, swap_, bytes, n, out + first, to);
+    forEachRun(array, payload, scalarSize(array.type), [&](const uint8_t *bytes, uint64_t first, uint64_t n) {
+      convertPacked(array.type, swap_, bytes, n, out + first, to);
       // Whether any value is bad, without an early exit, so that the loop vectorises; which one, only then.
       unsigned anyBad = 0; // not a bool, whose |= does not vectorise
       for (uint64_t i = first; i < first + n; ++i)

@@ -1,4 +1,5 @@
-// Transfer-function presets: ParaView's colour-map JSON and a few built-in ones.
+// Transfer-function presets as ParaView defines them, a few built-in ones, and their evaluation. Preset files
+// (ParaView's colour-map JSON) are read and written by io/color_map_io.h.
 #pragma once
 
 #include "core/vec.h"
@@ -18,16 +19,10 @@ struct ColorMap {
   Vec3f nanColor{1.f, 1.f, 0.f};
 };
 
-/// Reads ParaView's colour-map preset JSON (an array of presets, or one preset object). Takes the preset
-/// named `name`, or the first with RGBPoints when `name` is empty. Throws uvr::Error naming the file.
-ColorMap readColorMapFile(const std::string &path, const std::string &name = {});
-
-/// Every preset of a ParaView preset file that has RGBPoints, in file order (the viewer's preset list).
-std::vector<ColorMap> readColorMapPresets(const std::string &path);
-
-/// Writes `map` as a ParaView preset file (an array holding one preset) that ParaView's *Import preset* and
-/// readColorMapFile read back. Throws uvr::Error when the file cannot be written.
-void writeColorMapFile(const std::string &path, const ColorMap &map);
+/// Throws uvr::Error naming `file` and `position` unless `map` can be sampled: RGBPoints given, both point
+/// lists of whole points (4 values each) in non-decreasing x, midpoints and sharpness in [0, 1], and a known
+/// colour space.
+void checkColorMap(const ColorMap &map, const std::string &file, const std::string &position);
 
 /// Names of the built-in presets, the default first.
 std::vector<std::string> builtinColorMapNames();
