@@ -1,14 +1,13 @@
 #include "backend/cuda/cuda_backend.h"
 
+#include "backend/cuda/boundary_crossings.cuh"
 #include "backend/cuda/cuda_build.cuh"
 #include "backend/cuda/device_buffer.cuh"
+#include "backend/cuda/partition_metadata.cuh"
 #include "core/error.h"
 #include "core/timer.h"
 #include "render/scene.h"
 
-#include <cub/block/block_reduce.cuh>
-#include <cub/device/device_scan.cuh>
-#include <cub/device/device_segmented_sort.cuh>
 #include <cuda_runtime.h>
 
 #include <tbb/blocked_range.h>
@@ -20,27 +19,6 @@
 #include <vector>
 
 namespace uvr {
-
-void checkCuda(cudaError_t status, const char *call, const char *file, int line) {
-  if (status == cudaSuccess)
-    return;
-  std::string what = std::string("CUDA: ") + call + " failed at " + file + ":" + std::to_string(line) + ": " +
-                     cudaGetErrorString(status);
-  if (status == cudaErrorMemoryAllocation) {
-    size_t free = 0, total = 0;
-    if (cudaMemGetInfo(&free, &total) == cudaSuccess)
-      what += " (" + std::to_string(free) + " of " + std::to_string(total) + " bytes free)";
-  }
-  throw Error(what);
-}
-
-void throwOutOfMemory(size_t bytes) {
-  size_t free = 0, total = 0;
-  cudaMemGetInfo(&free, &total);
-  throw Error("GPU out of memory: asked for " + std::to_string(bytes) + " bytes, " + std::to_string(free) +
-              " of " + std::to_string(total) + " free");
-}
-
 namespace {
 
 // 128 pixels per block.
@@ -93,111 +71,6 @@ __global__ void __launch_bounds__(kRenderBlockThreads, BlocksPerSm)
   }
 }
 
-/// Each boundary face's crossings with the rays of the pixels it covers: with no `keys`, counted into
-/// start[pixel + 1]; with them, placed at start[pixel + 1], which moves on by one each (findBoundaryCrossings
-/// says how start's entries change).
-__global__ void crossingsKernel(MeshView mesh, const uint32_t *faces, uint64_t faceCount, CameraView camera,
-                                uint64_t *start, uint64_t *keys) {
-  const uint64_t i = uint64_t(blockIdx.x) * blockDim.x + threadIdx.x;
-  if (i >= faceCount)
-    return;
-  auto *slots = reinterpret_cast<unsigned long long *>(start) + 1;
-  forEachPixelCrossing(mesh, faces[i], camera, [&](uint64_t pixel, uint64_t key) {
-    const unsigned long long slot = atomicAdd(slots + pixel, 1ull);
-    if (keys)
-      keys[slot] = key;
-  });
-}
-
-/// Links each KD node to its parent and each partition to its leaf node, for the metadata kernel's walk up.
-__global__ void linkNodesKernel(const KdNode *nodes, uint32_t nodeCount, uint32_t *parents,
-                                uint32_t *partitionNodes) {
-  const uint32_t node = blockIdx.x * blockDim.x + threadIdx.x;
-  if (node >= nodeCount)
-    return;
-  const KdNode n = nodes[node];
-  if (n.axis == KdNode::kLeaf) {
-    partitionNodes[n.child] = node;
-  } else {
-    parents[n.child] = node;
-    parents[n.child + 1] = node;
-  }
-}
-
-/// What the partitions' metadata is normalised by, reduced over all partitions. Non-negative floats order
-/// as their bit patterns, which lets integer atomics take their minimum and maximum.
-struct MetadataTotals {
-  uint32_t lowestVariance;  ///< bits of the smallest variance over the partitions drawn
-  uint32_t highestVariance; ///< bits of the largest
-  uint32_t transparent;     ///< partitions the transfer function makes fully transparent
-};
-constexpr MetadataTotals kEmptyTotals{0x7f800000u /* +inf */, 0u, 0u};
-constexpr int kMetadataBlock = 256;
-
-/// Per partition, as computePartitionMetadata on the host: the maximum opacity (at its leaf node, and raised
-/// into the nodes above, zeroed beforehand) and the colour variance (into `variance`, normalised by
-/// normalizeSigmaKernel).
-__global__ void partitionMetadataKernel(TransferFunctionRangeView tf, PartitionsView parts,
-                                        const uint32_t *parents, const uint32_t *partitionNodes,
-                                        float *variance, float *nodeMaxOpacity, MetadataTotals *totals) {
-  const uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
-  bool drawn = false;
-  float v = 0.f;
-  if (i < parts.count) {
-    const float opacity = maxf(tf.maxOpacity(parts.valueMin[i], parts.valueMax[i]), 0.f);
-    v = tf.colorVariance(parts.valueMin[i], parts.valueMax[i]);
-    variance[i] = v;
-    drawn = opacity > 0.f;
-    // Raise the nodes above to this maximum; stop at one that holds as much already: whoever raised it
-    // carries that value on to the root.
-    uint32_t node = partitionNodes[i];
-    nodeMaxOpacity[node] = opacity;
-    const uint32_t bits = __float_as_uint(opacity);
-    while (drawn && node != 0) {
-      node = parents[node];
-      if (atomicMax(reinterpret_cast<uint32_t *>(nodeMaxOpacity + node), bits) >= bits)
-        break;
-    }
-  }
-  using Reduce = cub::BlockReduce<uint32_t, kMetadataBlock>;
-  __shared__ typename Reduce::TempStorage storage;
-  const uint32_t varianceBits = __float_as_uint(v);
-  const uint32_t lowest = Reduce(storage).Reduce(drawn ? varianceBits : kEmptyTotals.lowestVariance,
-                                                 [](uint32_t a, uint32_t b) { return a < b ? a : b; });
-  __syncthreads();
-  const uint32_t highest =
-      Reduce(storage).Reduce(drawn ? varianceBits : 0u, [](uint32_t a, uint32_t b) { return a > b ? a : b; });
-  __syncthreads();
-  const uint32_t transparent = Reduce(storage).Sum(i < parts.count && !drawn ? 1u : 0u);
-  if (threadIdx.x == 0) {
-    atomicMin(&totals->lowestVariance, lowest);
-    atomicMax(&totals->highestVariance, highest);
-    atomicAdd(&totals->transparent, transparent);
-  }
-}
-
-/// Per partition, its sigma from the variance in `sigma`, lowered into the nodes above it as their
-/// nodeMinSigma (set above any sigma beforehand). Sigmas and kTransparentSigma order as their bits do as
-/// signed integers, which lets integer atomics take their minimum.
-__global__ void normalizeSigmaKernel(uint32_t count, const MetadataTotals *totals, const uint32_t *parents,
-                                     const uint32_t *partitionNodes, const float *nodeMaxOpacity,
-                                     float *sigma, float *nodeMinSigma) {
-  const uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
-  if (i >= count)
-    return;
-  sigma[i] = normalizedSigma(sigma[i], __uint_as_float(totals->lowestVariance),
-                             __uint_as_float(totals->highestVariance));
-  uint32_t node = partitionNodes[i];
-  const float lowest = nodeMaxOpacity[node] > 0.f ? sigma[i] : kTransparentSigma;
-  nodeMinSigma[node] = lowest;
-  const int bits = __float_as_int(lowest);
-  while (node != 0) {
-    node = parents[node];
-    if (atomicMin(reinterpret_cast<int *>(nodeMinSigma + node), bits) <= bits)
-      break;
-  }
-}
-
 } // namespace
 
 /// Page-locked host memory. Copies from the GPU into pageable memory go through the driver's own small pinned
@@ -236,12 +109,11 @@ struct CudaBackend::Impl {
   SceneView scene; // device pointers
   DeviceBuffer<Vec3f> points;
   DeviceBuffer<uint32_t> tets, pyramids, wedges, hexes;
-  DeviceBuffer<float> values, nodeMaxOpacity, nodeMinSigma, sigma;
+  DeviceBuffer<float> values;
   DeviceAcceleration accel;
   double buildMs = 0.0;
   std::vector<std::pair<std::string, double>> buildSteps;
-  DeviceBuffer<uint32_t> kdParents, partitionNodes;
-  DeviceBuffer<MetadataTotals> totals;
+  DeviceMetadata metadata;
   DeviceBuffer<double> tfPrefixSum, tfPrefixSquares;
   DeviceBuffer<float> tfOpacityMax;
   DeviceBuffer<Vec4f> tfTable;
@@ -249,8 +121,7 @@ struct CudaBackend::Impl {
   DeviceBuffer<float> opacity;
   DeviceBuffer<uint32_t> samples;
   DeviceBuffer<SampleTotals> sampleTotals;
-  DeviceBuffer<uint64_t> crossingStart, crossingKeys, placedCrossings; // see findBoundaryCrossings
-  CubScratch scratch;
+  DeviceCrossings crossings;
   PinnedBuffer staging;                                   // the frame's arrays on their way to the caller's
   cudaEvent_t kernelStart = nullptr, kernelEnd = nullptr; // around the frame's kernels
   cudaEvent_t renderStart = nullptr;                      // from there to kernelEnd, the render kernel alone
@@ -303,21 +174,7 @@ CudaBackend::CudaBackend(const MeshView &mesh, uint64_t pointCount, uint32_t lea
   d.buildMs = timer.milliseconds();
   SceneView &scene = d.scene;
   scene = makeSceneView(onDevice, d.accel);
-  const uint32_t nodeCount = uint32_t(d.accel.partitions.nodes.size()),
-                 partitionCount = scene.partitions.count;
-
-  d.kdParents.resize(nodeCount);
-  d.partitionNodes.resize(partitionCount);
-  linkNodesKernel<<<blocksFor(nodeCount, kMetadataBlock), kMetadataBlock>>>(
-      scene.partitions.nodes, nodeCount, d.kdParents.data(), d.partitionNodes.data());
-  UVR_CUDA_CHECK(cudaGetLastError());
-  d.sigma.resize(partitionCount);
-  d.nodeMaxOpacity.resize(nodeCount);
-  d.nodeMinSigma.resize(nodeCount);
-  d.totals.resize(1);
-  scene.sigma = d.sigma.data();
-  scene.nodeMaxOpacity = d.nodeMaxOpacity.data();
-  scene.nodeMinSigma = d.nodeMinSigma.data();
+  d.metadata.link(scene, uint32_t(d.accel.partitions.nodes.size()));
   UVR_CUDA_CHECK(cudaDeviceSynchronize());
 }
 
@@ -334,74 +191,11 @@ uint32_t CudaBackend::setTransferFunction(const TransferFunction &tf) {
   d.skippingFrames = 0;
   d.tiles = false;
 
-  const uint32_t count = d.scene.partitions.count;
-  UVR_CUDA_CHECK(cudaMemset(d.nodeMaxOpacity.data(), 0, d.nodeMaxOpacity.bytes()));
-  UVR_CUDA_CHECK(cudaMemcpy(d.totals.data(), &kEmptyTotals, sizeof kEmptyTotals, cudaMemcpyHostToDevice));
-  partitionMetadataKernel<<<blocksFor(count, kMetadataBlock), kMetadataBlock>>>(
-      ranges, d.scene.partitions, d.kdParents.data(), d.partitionNodes.data(), d.sigma.data(),
-      d.nodeMaxOpacity.data(), d.totals.data());
-  UVR_CUDA_CHECK(cudaGetLastError());
-  UVR_CUDA_CHECK(cudaMemset(d.nodeMinSigma.data(), 0x7f, d.nodeMinSigma.bytes())); // 3.4e38, above any sigma
-  normalizeSigmaKernel<<<blocksFor(count, kMetadataBlock), kMetadataBlock>>>(
-      count, d.totals.data(), d.kdParents.data(), d.partitionNodes.data(), d.nodeMaxOpacity.data(),
-      d.sigma.data(), d.nodeMinSigma.data());
-  UVR_CUDA_CHECK(cudaGetLastError());
-  MetadataTotals totals{};
-  d.totals.download(&totals, 1); // waits for the kernels; a fault surfaces here
-  return totals.transparent;
+  return d.metadata.update(ranges, d.scene.partitions);
 }
 
 PartitionMetadata CudaBackend::metadata() const {
-  const Impl &d = *impl_;
-  PartitionMetadata meta;
-  const uint32_t count = d.scene.partitions.count;
-  meta.sigma.resize(count);
-  meta.nodeMaxOpacity.resize(d.nodeMaxOpacity.bytes() / sizeof(float));
-  meta.nodeMinSigma.resize(meta.nodeMaxOpacity.size());
-  d.sigma.download(meta.sigma.data(), count);
-  d.nodeMaxOpacity.download(meta.nodeMaxOpacity.data(), meta.nodeMaxOpacity.size());
-  d.nodeMinSigma.download(meta.nodeMinSigma.data(), meta.nodeMinSigma.size());
-  // A partition's maximum is its leaf node's.
-  std::vector<uint32_t> leafNodes(count);
-  d.partitionNodes.download(leafNodes.data(), count);
-  meta.maxOpacity.resize(count);
-  for (uint32_t i = 0; i < count; ++i)
-    meta.maxOpacity[i] = meta.nodeMaxOpacity[leafNodes[i]];
-  MetadataTotals totals{};
-  d.totals.download(&totals, 1);
-  meta.transparentCount = totals.transparent;
-  return meta;
-}
-
-void CudaBackend::findCrossings(const CameraView &camera, size_t pixels) {
-  Impl &d = *impl_;
-  const uint64_t faces = d.accel.boundaryFaceList.size();
-  const unsigned blocks = blocksFor(faces, kRenderBlockThreads);
-  // What the host's findBoundaryCrossings makes, by testing the faces twice: once to count each pixel's
-  // crossings, once to place them from its start on; then ordered pixel by pixel.
-  d.crossingStart.resize(pixels + 2);
-  UVR_CUDA_CHECK(cudaMemsetAsync(d.crossingStart.data(), 0, d.crossingStart.bytes()));
-  crossingsKernel<<<blocks, kRenderBlockThreads>>>(d.scene.mesh, d.accel.boundaryFaceList.data(), faces,
-                                                   camera, d.crossingStart.data(), nullptr);
-  UVR_CUDA_CHECK(cudaGetLastError());
-  uint64_t *counts = d.crossingStart.data() + 1;
-  d.scratch.run([&](void *storage, size_t &bytes) {
-    return cub::DeviceScan::ExclusiveSum(storage, bytes, counts, counts, int64_t(pixels + 1));
-  });
-  uint64_t total = 0;
-  UVR_CUDA_CHECK(cudaMemcpy(&total, counts + pixels, sizeof total, cudaMemcpyDeviceToHost));
-  if (total == 0)
-    return;
-  d.placedCrossings.grow(total, 0);
-  d.crossingKeys.grow(total, 0);
-  crossingsKernel<<<blocks, kRenderBlockThreads>>>(d.scene.mesh, d.accel.boundaryFaceList.data(), faces,
-                                                   camera, d.crossingStart.data(), d.placedCrossings.data());
-  UVR_CUDA_CHECK(cudaGetLastError());
-  const uint64_t *start = d.crossingStart.data();
-  d.scratch.run([&](void *storage, size_t &bytes) {
-    return cub::DeviceSegmentedSort::SortKeys(storage, bytes, d.placedCrossings.data(), d.crossingKeys.data(),
-                                              int64_t(total), int64_t(pixels), start, start + 1);
-  });
+  return impl_->metadata.download(impl_->scene.partitions.count);
 }
 
 SampleTotals CudaBackend::render(const CameraView &camera, const IntegratorSettings &settings,
@@ -431,11 +225,11 @@ SampleTotals CudaBackend::render(const CameraView &camera, const IntegratorSetti
   const bool crossings =
       skipsSpace(settings.mode) && faces > 0 && crossingsApply(camera, d.scene.partitions.rootBounds);
   if (crossings)
-    findCrossings(camera, pixels);
-  const uint64_t *crossingStart = crossings ? d.crossingStart.data() : nullptr;
+    d.crossings.find(d.scene.mesh, d.accel.boundaryFaceList, camera, pixels);
+  const uint64_t *crossingStart = crossings ? d.crossings.start() : nullptr;
   const auto kernel = skipping ? renderKernel<kSkippingBlocksPerSm> : renderKernel<kMarchingBlocksPerSm>;
   UVR_CUDA_CHECK(cudaEventRecord(d.renderStart));
-  kernel<<<grid, block>>>(d.scene, settings, camera, device, height, crossingStart, d.crossingKeys.data(),
+  kernel<<<grid, block>>>(d.scene, settings, camera, device, height, crossingStart, d.crossings.keys(),
                           d.sampleTotals.data());
   UVR_CUDA_CHECK(cudaGetLastError());
   UVR_CUDA_CHECK(cudaEventRecord(d.kernelEnd));
@@ -502,15 +296,14 @@ SampleTotals CudaBackend::render(const CameraView &camera, const IntegratorSetti
 size_t CudaBackend::deviceMemoryBytes() const {
   const Impl &d = *impl_;
   return deviceSceneBytes() + d.rgb.bytes() + d.opacity.bytes() + d.samples.bytes() + d.sampleTotals.bytes() +
-         d.crossingStart.bytes() + d.crossingKeys.bytes() + d.placedCrossings.bytes();
+         d.crossings.bytes();
 }
 
 size_t CudaBackend::deviceSceneBytes() const {
   const Impl &d = *impl_;
   return d.points.bytes() + d.tets.bytes() + d.pyramids.bytes() + d.wedges.bytes() + d.hexes.bytes() +
-         d.values.bytes() + d.accel.bytes() + d.nodeMaxOpacity.bytes() + d.nodeMinSigma.bytes() +
-         d.sigma.bytes() + d.kdParents.bytes() + d.partitionNodes.bytes() + d.totals.bytes() +
-         d.tfTable.bytes() + d.tfPrefixSum.bytes() + d.tfPrefixSquares.bytes() + d.tfOpacityMax.bytes();
+         d.values.bytes() + d.accel.bytes() + d.metadata.bytes() + d.tfTable.bytes() + d.tfPrefixSum.bytes() +
+         d.tfPrefixSquares.bytes() + d.tfOpacityMax.bytes();
 }
 
 uint32_t CudaBackend::partitionCount() const { return impl_->scene.partitions.count; }

@@ -49,9 +49,6 @@ public:
   std::string deviceName() const override;
 
 private:
-  /// Every pixel's boundary crossings for `camera`, into the crossing buffers (see findBoundaryCrossings).
-  void findCrossings(const CameraView &camera, size_t pixels);
-
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };

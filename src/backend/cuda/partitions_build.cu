@@ -1,0 +1,344 @@
+// The GPU's twin of accel/partitions_build.cpp: the median-split KD-tree, built one level at a time, and the
+// partitions' boxes, value ranges and cell counts.
+#include "backend/cuda/device_builder.cuh"
+
+#include "mesh/cell.h"
+
+#include <cub/device/device_scan.cuh>
+
+namespace uvr::gpu_build {
+namespace {
+
+constexpr uint32_t kSettled = 0xffffffffu; // a position whose cells have reached their leaf
+
+// ---- Partitions: the median-split KD-tree, one level at a time
+//
+// The cells are kept in three lists, each sorted by centroid along one axis (ties by cell index). A node's
+// cells occupy the same positions in all three; its median along an axis is the middle of that axis's list,
+// and splitting it is a stable partition of each list by the side its cells fall on, as in the host's
+// nth_element with the same order.
+
+struct LevelNode {
+  uint32_t start, count; ///< positions in the sorted lists
+  Box3f space;           ///< the node's cell of space
+
+  __device__ uint32_t half() const { return count / 2; } ///< cells that go below the split
+  __device__ bool goesAbove(uint64_t position) const { return position - start >= half(); }
+};
+
+__global__ void axisKeysKernel(const Vec3f *centroids, uint64_t cells, int axis, uint32_t *keys) {
+  const uint64_t c = globalIndex();
+  if (c < cells)
+    keys[c] = orderedBits(centroids[c][axis]);
+}
+
+struct SortedLists {
+  const uint32_t *axis[3];
+};
+
+/// Decides per node of the level whether and where it splits, as the host's TreeBuilder::split.
+__global__ void classifyKernel(const LevelNode *level, uint32_t count, SortedLists lists,
+                               const Vec3f *centroids, uint32_t leafSize, int depth, KdNode *decisions,
+                               uint32_t *splits) {
+  const uint64_t i = globalIndex();
+  if (i >= count)
+    return;
+  const LevelNode node = level[i];
+  KdNode decision;
+  bool split = false;
+  if (node.count > leafSize && depth < kMaxPartitionDepth) {
+    Vec3f extent;
+    for (int a = 0; a < 3; ++a)
+      extent[a] =
+          centroids[lists.axis[a][node.start + node.count - 1]][a] - centroids[lists.axis[a][node.start]][a];
+    const int axis = widestAxis(extent);
+    decision = {centroids[lists.axis[axis][node.start + node.count / 2]][axis], uint32_t(axis), 0};
+    split = decision.split > node.space.lower[axis] && decision.split < node.space.upper[axis];
+  }
+  decisions[i] = decision;
+  splits[i] = split;
+}
+
+/// Writes the level's nodes: inner ones with their children (the next level, in order), leaves with their
+/// partition index and cell of space.
+__global__ void emitKernel(const LevelNode *level, uint32_t count, const KdNode *decisions,
+                           const uint32_t *splits, const uint32_t *splitRank, uint32_t levelBase,
+                           uint32_t leavesBefore, KdNode *nodes, LevelNode *next, Box3f *leafSpace) {
+  const uint64_t i = globalIndex();
+  if (i >= count)
+    return;
+  const LevelNode node = level[i];
+  if (splits[i]) {
+    const uint32_t rank = splitRank[i];
+    KdNode inner = decisions[i];
+    inner.child = levelBase + count + 2 * rank;
+    nodes[levelBase + i] = inner;
+    Box3f below = node.space, above = node.space;
+    below.upper[int(inner.axis)] = inner.split;
+    above.lower[int(inner.axis)] = inner.split;
+    next[2 * rank] = {node.start, node.half(), below};
+    next[2 * rank + 1] = {node.start + node.half(), node.count - node.half(), above};
+  } else {
+    const uint32_t leaf = leavesBefore + uint32_t(i) - splitRank[i];
+    nodes[levelBase + i] = {0.f, KdNode::kLeaf, leaf};
+    leafSpace[leaf] = node.space;
+  }
+}
+
+/// Which side of its node's split each cell goes to: the upper half of the split axis's list goes above.
+__global__ void sideKernel(uint64_t cells, const uint32_t *positionNode, const LevelNode *level,
+                           const KdNode *decisions, const uint32_t *splits, SortedLists lists,
+                           uint8_t *above) {
+  const uint64_t p = globalIndex();
+  if (p >= cells)
+    return;
+  const uint32_t s = positionNode[p];
+  if (s == kSettled || !splits[s])
+    return;
+  above[lists.axis[decisions[s].axis][p]] = level[s].goesAbove(p);
+}
+
+__global__ void aboveFlagsKernel(uint64_t cells, const uint32_t *positionNode, const uint32_t *splits,
+                                 const uint32_t *list, const uint8_t *above, uint32_t *flags) {
+  const uint64_t p = globalIndex();
+  if (p >= cells)
+    return;
+  const uint32_t s = positionNode[p];
+  flags[p] = s != kSettled && splits[s] ? above[list[p]] : 0u;
+}
+
+/// The stable partition of one list: below before above within each splitting node, order kept on each side.
+__global__ void partitionListKernel(uint64_t cells, const uint32_t *positionNode, const LevelNode *level,
+                                    const uint32_t *splits, const uint32_t *list, const uint8_t *above,
+                                    const uint32_t *aboveBefore, uint32_t *out) {
+  const uint64_t p = globalIndex();
+  if (p >= cells)
+    return;
+  const uint32_t s = positionNode[p], cell = list[p];
+  if (s == kSettled || !splits[s]) {
+    out[p] = cell;
+    return;
+  }
+  const LevelNode node = level[s];
+  const uint32_t ones = aboveBefore[p] - aboveBefore[node.start];
+  out[above[cell] ? node.start + node.half() + ones : uint32_t(p) - ones] = cell;
+}
+
+__global__ void advancePositionsKernel(uint64_t cells, uint32_t *positionNode, const LevelNode *level,
+                                       const uint32_t *splits, const uint32_t *splitRank) {
+  const uint64_t p = globalIndex();
+  if (p >= cells)
+    return;
+  const uint32_t s = positionNode[p];
+  if (s == kSettled)
+    return;
+  if (!splits[s]) {
+    positionNode[p] = kSettled;
+    return;
+  }
+  positionNode[p] = 2 * splitRank[s] + (level[s].goesAbove(p) ? 1u : 0u);
+}
+
+/// What a partition gathers from the cells whose boxes touch it, as ordered bits.
+struct LeafAccumulator {
+  AtomicBox cells;
+  uint32_t valueMin, valueMax;
+  unsigned long long count;
+};
+
+__global__ void clearLeavesKernel(uint32_t leafCount, LeafAccumulator empty, LeafAccumulator *leaves) {
+  const uint64_t i = globalIndex();
+  if (i < leafCount)
+    leaves[i] = empty;
+}
+
+__global__ void gatherLeavesKernel(MeshView mesh, uint64_t cells, const KdNode *nodes,
+                                   LeafAccumulator *leaves) {
+  const uint64_t c = globalIndex();
+  if (c >= cells)
+    return;
+  const Box3f box = cellBounds(mesh, c);
+  float lo, hi;
+  cellValueRange(mesh, c, lo, hi);
+  const uint32_t lower[3] = {orderedBits(box.lower.x), orderedBits(box.lower.y), orderedBits(box.lower.z)},
+                 upper[3] = {orderedBits(box.upper.x), orderedBits(box.upper.y), orderedBits(box.upper.z)};
+  const uint32_t valueMin = orderedBits(lo), valueMax = orderedBits(hi);
+  forEachLeafTouching(nodes, box, [&](uint32_t leaf) {
+#if __CUDA_ARCH__ >= 800
+    // Neighbouring cells mostly lie in the same leaf, and every cell's atomics on one leaf's addresses made
+    // large leaves slow to gather: the lanes of the warp that share the leaf combine their values first, and
+    // the lowest of them updates it.
+    const uint32_t sharing = __match_any_sync(__activemask(), leaf);
+    uint32_t lowerHere[3], upperHere[3];
+    for (int k = 0; k < 3; ++k) {
+      lowerHere[k] = __reduce_min_sync(sharing, lower[k]);
+      upperHere[k] = __reduce_max_sync(sharing, upper[k]);
+    }
+    const uint32_t valueMinHere = __reduce_min_sync(sharing, valueMin),
+                   valueMaxHere = __reduce_max_sync(sharing, valueMax);
+    const unsigned long long cellsHere = __popc(sharing);
+    if ((threadIdx.x & 31u) != uint32_t(__ffs(sharing) - 1))
+      return;
+#else
+    const uint32_t *lowerHere = lower, *upperHere = upper;
+    const uint32_t valueMinHere = valueMin, valueMaxHere = valueMax;
+    const unsigned long long cellsHere = 1;
+#endif
+    LeafAccumulator &acc = leaves[leaf];
+    acc.cells.extendBits(lowerHere, upperHere);
+    atomicMin(&acc.valueMin, valueMinHere);
+    atomicMax(&acc.valueMax, valueMaxHere);
+    atomicAdd(&acc.count, cellsHere);
+  });
+}
+
+/// Each partition's box shrunk to its cells within its cell of space, padded as the host pads it.
+__global__ void finishLeavesKernel(uint32_t leafCount, const LeafAccumulator *leaves, const Box3f *leafSpace,
+                                   float pad, Box3f *shrunk, float *valueMin, float *valueMax,
+                                   uint64_t *counts) {
+  const uint64_t i = globalIndex();
+  if (i >= leafCount)
+    return;
+  const LeafAccumulator acc = leaves[i];
+  shrunk[i] = padded(intersection(acc.cells.box(), leafSpace[i]), pad);
+  valueMin[i] = fromOrderedBits(acc.valueMin);
+  valueMax[i] = fromOrderedBits(acc.valueMax);
+  counts[i] = acc.count;
+}
+
+/// Node boxes of one level, from the level below (children come after their parents).
+__global__ void nodeBoundsKernel(uint32_t first, uint32_t count, const KdNode *nodes, const Box3f *shrunk,
+                                 Box3f *nodeBounds) {
+  const uint64_t i = globalIndex();
+  if (i >= count)
+    return;
+  const uint32_t node = first + uint32_t(i);
+  const KdNode n = nodes[node];
+  if (n.axis == KdNode::kLeaf) {
+    nodeBounds[node] = shrunk[n.child];
+  } else {
+    Box3f box = nodeBounds[n.child];
+    box.extend(nodeBounds[n.child + 1]);
+    nodeBounds[node] = box;
+  }
+}
+
+} // namespace
+
+void DeviceBuilder::partitions() {
+  const float pad = partitionPadding(meshBounds_);
+  const Box3f root = padded(meshBounds_, pad);
+  out_.partitions.rootBounds = root;
+
+  // The three sorted lists, and their partitioned copies.
+  DeviceBuffer<uint32_t> lists[3], spare[3];
+  {
+    DeviceBuffer<uint32_t> keys, sortedKeys;
+    keys.resize(cells_);
+    for (int axis = 0; axis < 3; ++axis) {
+      axisKeysKernel<<<cellBlocks(), kBlock>>>(centroids_.data(), cells_, axis, keys.data());
+      UVR_CUDA_CHECK(cudaGetLastError());
+      sortCells(keys, 32, sortedKeys, lists[axis]);
+    }
+    cellIndices_.release();
+  }
+  for (auto &list : spare)
+    list.resize(cells_);
+  DeviceBuffer<uint32_t> positionNode, flags, aboveBefore;
+  DeviceBuffer<uint8_t> above;
+  positionNode.resize(cells_);
+  flags.resize(cells_);
+  aboveBefore.resize(cells_);
+  above.resize(cells_);
+  UVR_CUDA_CHECK(cudaMemset(positionNode.data(), 0, positionNode.bytes()));
+
+  DeviceBuffer<LevelNode> level, next;
+  const LevelNode rootNode{0, uint32_t(cells_), root};
+  level.upload(&rootNode, 1);
+  DeviceBuffer<KdNode> nodes, decisions;
+  DeviceBuffer<Box3f> leafSpace;
+  DeviceBuffer<uint32_t> splits, splitRank;
+  std::vector<std::pair<uint32_t, uint32_t>> levels; // first node and count per level
+  uint32_t levelBase = 0, leaves = 0, count = 1;
+  for (int depth = 0; count > 0; ++depth) {
+    const SortedLists sorted{{lists[0].data(), lists[1].data(), lists[2].data()}};
+    decisions.grow(count, 0);
+    splits.grow(count, 0);
+    splitRank.grow(count, 0);
+    classifyKernel<<<blocksFor(count, kBlock), kBlock>>>(level.data(), count, sorted, centroids_.data(),
+                                                         leafSize_, depth, decisions.data(), splits.data());
+    UVR_CUDA_CHECK(cudaGetLastError());
+    scratch_.run([&](void *storage, size_t &bytes) {
+      return cub::DeviceScan::ExclusiveSum(storage, bytes, splits.data(), splitRank.data(), int64_t(count));
+    });
+    const uint32_t splitting =
+        downloadOne(splitRank.data() + count - 1) + downloadOne(splits.data() + count - 1);
+    const uint32_t newLeaves = count - splitting;
+    nodes.grow(levelBase + count, levelBase);
+    leafSpace.grow(leaves + newLeaves, leaves);
+    next.grow(2 * uint64_t(splitting), 0);
+    emitKernel<<<blocksFor(count, kBlock), kBlock>>>(level.data(), count, decisions.data(), splits.data(),
+                                                     splitRank.data(), levelBase, leaves, nodes.data(),
+                                                     next.data(), leafSpace.data());
+    UVR_CUDA_CHECK(cudaGetLastError());
+    levels.emplace_back(levelBase, count);
+    levelBase += count;
+    leaves += newLeaves;
+    if (splitting > 0) {
+      sideKernel<<<cellBlocks(), kBlock>>>(cells_, positionNode.data(), level.data(), decisions.data(),
+                                           splits.data(), sorted, above.data());
+      UVR_CUDA_CHECK(cudaGetLastError());
+      for (int axis = 0; axis < 3; ++axis) {
+        aboveFlagsKernel<<<cellBlocks(), kBlock>>>(cells_, positionNode.data(), splits.data(),
+                                                   lists[axis].data(), above.data(), flags.data());
+        UVR_CUDA_CHECK(cudaGetLastError());
+        scratch_.run([&](void *storage, size_t &bytes) {
+          return cub::DeviceScan::ExclusiveSum(storage, bytes, flags.data(), aboveBefore.data(),
+                                               int64_t(cells_));
+        });
+        partitionListKernel<<<cellBlocks(), kBlock>>>(cells_, positionNode.data(), level.data(),
+                                                      splits.data(), lists[axis].data(), above.data(),
+                                                      aboveBefore.data(), spare[axis].data());
+        UVR_CUDA_CHECK(cudaGetLastError());
+        lists[axis].swap(spare[axis]);
+      }
+      advancePositionsKernel<<<cellBlocks(), kBlock>>>(cells_, positionNode.data(), level.data(),
+                                                       splits.data(), splitRank.data());
+      UVR_CUDA_CHECK(cudaGetLastError());
+    }
+    level.swap(next);
+    count = 2 * splitting;
+  }
+  centroids_.release();
+
+  const uint32_t nodeCount = levelBase;
+  out_.partitions.nodes.resize(nodeCount);
+  UVR_CUDA_CHECK(cudaMemcpy(out_.partitions.nodes.data(), nodes.data(), nodeCount * sizeof(KdNode),
+                            cudaMemcpyDeviceToDevice));
+  DeviceBuffer<LeafAccumulator> accumulators;
+  accumulators.resize(leaves);
+  LeafAccumulator empty{AtomicBox::empty(), orderedBits(INFINITY), orderedBits(-INFINITY), 0};
+  clearLeavesKernel<<<blocksFor(leaves, kBlock), kBlock>>>(leaves, empty, accumulators.data());
+  UVR_CUDA_CHECK(cudaGetLastError());
+  gatherLeavesKernel<<<cellBlocks(), kBlock>>>(mesh_, cells_, out_.partitions.nodes.data(),
+                                               accumulators.data());
+  UVR_CUDA_CHECK(cudaGetLastError());
+  DeviceBuffer<Box3f> &shrunk = out_.partitions.bounds;
+  shrunk.resize(leaves);
+  out_.partitions.valueMin.resize(leaves);
+  out_.partitions.valueMax.resize(leaves);
+  out_.partitions.cellCounts.resize(leaves);
+  finishLeavesKernel<<<blocksFor(leaves, kBlock), kBlock>>>(
+      leaves, accumulators.data(), leafSpace.data(), pad, shrunk.data(), out_.partitions.valueMin.data(),
+      out_.partitions.valueMax.data(), out_.partitions.cellCounts.data());
+  UVR_CUDA_CHECK(cudaGetLastError());
+  out_.partitions.nodeBounds.resize(nodeCount);
+  for (auto it = levels.rbegin(); it != levels.rend(); ++it) {
+    nodeBoundsKernel<<<blocksFor(it->second, kBlock), kBlock>>>(it->first, it->second,
+                                                                out_.partitions.nodes.data(), shrunk.data(),
+                                                                out_.partitions.nodeBounds.data());
+    UVR_CUDA_CHECK(cudaGetLastError());
+  }
+}
+
+} // namespace uvr::gpu_build
