@@ -4,15 +4,14 @@
 
 #include "core/vec.h"
 
+#include <uvr/gen.h>
+
 #include <array>
 #include <cstdint>
 #include <string>
 #include <vector>
 
 namespace uvr {
-
-/// Element types of raw volumes (NIfTI files name theirs in the header).
-enum class VoxelType : uint8_t { UInt8, Int16, UInt16, Float32 };
 
 /// Voxel values as floats (scl_slope / scl_inter applied), x fastest. `toWorld` maps continuous voxel
 /// indices (i, j, k) to world coordinates: row r is (a, b, c, t) with world_r = a·i + b·j + c·k + t.

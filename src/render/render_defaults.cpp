@@ -5,7 +5,6 @@
 #include <tbb/info.h>
 
 #include <algorithm>
-#include <filesystem>
 
 namespace uvr {
 
@@ -24,16 +23,6 @@ int chooseField(const Mesh &mesh, const std::string &name, const std::string &so
     throw Error(source, "", "no field named '" + name + "'; fields: " + names);
   }
   return index;
-}
-
-ColorMap chooseColorMap(const std::string &tf, const std::string &tfName) {
-  if (tf.empty())
-    return builtinColorMap(builtinColorMapNames().front());
-  if (std::filesystem::exists(tf))
-    return readColorMapFile(tf, tfName);
-  if (tf.size() > 5 && tf.substr(tf.size() - 5) == ".json")
-    throw Error(tf, "", "cannot open transfer-function file");
-  return builtinColorMap(tf);
 }
 
 IntegratorSettings samplingSettings(RenderMode mode, float defaultStep, float s1, float s2, float p,

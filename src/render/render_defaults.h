@@ -21,10 +21,6 @@ constexpr float kDefaultP = 4.f;
 /// first field when empty). Errors name `source` and list the fields.
 int chooseField(const Mesh &mesh, const std::string &name, const std::string &source);
 
-/// The preset `tf`: a ParaView preset file (taking preset `tfName`, or the first) or a built-in name; the
-/// default built-in one when `tf` is empty.
-ColorMap chooseColorMap(const std::string &tf, const std::string &tfName = {});
-
 /// Sampling settings with the defaults for what is not given (<= 0): s1 and unit = `defaultStep` (see
 /// defaultStepSize), s2 = kDefaultS2Factor * defaultStep (at least s1), p = kDefaultP.
 IntegratorSettings samplingSettings(RenderMode mode, float defaultStep, float s1 = 0.f, float s2 = 0.f,

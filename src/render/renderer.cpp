@@ -13,43 +13,6 @@
 
 namespace uvr {
 
-const char *modeName(RenderMode mode) {
-  switch (mode) {
-  case RenderMode::Reference:
-    return "reference";
-  case RenderMode::Skip:
-    return "skip";
-  case RenderMode::Adaptive:
-    return "adaptive";
-  case RenderMode::Full:
-    return "full";
-  }
-  return "?";
-}
-
-RenderMode parseMode(const std::string &name) {
-  for (RenderMode mode : {RenderMode::Reference, RenderMode::Skip, RenderMode::Adaptive, RenderMode::Full})
-    if (name == modeName(mode))
-      return mode;
-  throw Error("unknown mode '" + name + "': expected reference, skip, adaptive or full");
-}
-
-const char *backendName(Backend backend) { return backend == Backend::Cuda ? "cuda" : "cpu"; }
-
-Backend parseBackend(const std::string &name) {
-  if (name == "cpu")
-    return Backend::Cpu;
-  if (name == "cuda") {
-#ifdef UVR_HAVE_CUDA
-    return Backend::Cuda;
-#else
-    throw Error(
-        "this uvr was built without CUDA (no CUDA toolkit was found at build time): use --backend cpu");
-#endif
-  }
-  throw Error("unknown backend '" + name + "': expected cpu or cuda");
-}
-
 namespace {
 
 /// Whether a structure that only speeds walks up may take `bytes`: the per-tet records (64 bytes a tet) and

@@ -13,6 +13,8 @@
 #include "render/integrator.h"
 #include "render/transfer_function.h"
 
+#include <uvr/settings.h>
+
 #include <memory>
 #include <optional>
 #include <span>
@@ -21,19 +23,6 @@
 #include <vector>
 
 namespace uvr {
-
-enum class Backend : uint8_t { Cpu, Cuda };
-
-const char *backendName(Backend backend);
-
-/// A leaf size that asks for the default (defaultLeafSize).
-constexpr uint32_t kAutoLeafSize = 0;
-/// Parses cpu|cuda; throws uvr::Error otherwise, and for cuda when this build has no CUDA backend.
-Backend parseBackend(const std::string &name);
-
-const char *modeName(RenderMode mode);
-/// Parses reference|skip|adaptive|full; throws uvr::Error otherwise.
-RenderMode parseMode(const std::string &name);
 
 struct RenderSettings {
   IntegratorSettings integrator;
