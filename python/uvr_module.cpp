@@ -1,5 +1,7 @@
 // The `uvr` Python module: meshes from files or numpy arrays (PyVista's layout), transfer functions, and the
 // renderer, with the defaults and error messages of `uvr render`.
+#include "front_end.h"
+
 #include "core/error.h"
 #include "core/timer.h"
 #include "image/image.h"
@@ -254,7 +256,7 @@ public:
   PyRenderer(std::shared_ptr<PyMesh> mesh, const std::optional<std::string> &field,
              const std::string &backend, uint32_t leafSize)
       : mesh_(std::move(mesh)), leafSize_(leafSize) {
-    backendKind_ = parseBackend(backend);
+    backendKind_ = parseBackendOption(backend);
     fieldIndex_ = chooseField(mesh_->mesh, field.value_or(""), mesh_->source);
     py::gil_scoped_release release;
     defaultStep_ = defaultStepSize(volumeStats(mesh_->mesh));

@@ -36,11 +36,6 @@ IntegratorSettings samplingSettings(RenderMode mode, float defaultStep, float s1
   return is;
 }
 
-void checkCamera(const Camera &camera) {
-  if (length(cross(camera.at - camera.eye, camera.up)) == 0.f)
-    throw Error("--eye, --at and --up must not be collinear");
-}
-
 nlohmann::json frameStats(const Mesh &mesh, const Renderer &renderer, const RenderSettings &settings,
                           const Frame &frame, double renderMs, int fieldIndex) {
   const IntegratorSettings &is = settings.integrator;

@@ -26,9 +26,6 @@ int chooseField(const Mesh &mesh, const std::string &name, const std::string &so
 IntegratorSettings samplingSettings(RenderMode mode, float defaultStep, float s1 = 0.f, float s2 = 0.f,
                                     float p = 0.f, float unit = 0.f);
 
-/// Throws uvr::Error when the camera's view direction and view-up are collinear.
-void checkCamera(const Camera &camera);
-
 /// The statistics of one frame under the keys of `uvr render --stats` (all but load_ms and frames).
 nlohmann::json frameStats(const Mesh &mesh, const Renderer &renderer, const RenderSettings &settings,
                           const Frame &frame, double renderMs, int fieldIndex);
