@@ -1,19 +1,16 @@
 // The `uvr` Python module: meshes from files or numpy arrays (PyVista's layout), transfer functions, and the
 // renderer, with the defaults and error messages of `uvr render`.
-#include "core/error.h"
-#include "core/timer.h"
-#include "engine/render_defaults.h"
-#include "engine/renderer.h"
-#include "image/image.h"
-#include "io/color_map_io.h"
-#include "io/mesh_io.h"
-#include "mesh/mesh_stats.h"
+#include "front_end.h"
+
+#include <uvr/uvr.h>
 
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <memory>
 #include <optional>
 
@@ -22,10 +19,9 @@ using namespace uvr;
 
 namespace {
 
-/// A mesh and the name its errors carry: the file's path, as `uvr render` reports it, or "uvr.Mesh".
+/// A mesh; its errors name its source: the file's path, as `uvr render` reports it, or "uvr.Mesh".
 struct PyMesh {
-  Mesh mesh;
-  std::string source;
+  VolumeMesh mesh;
 };
 
 /// A preset and the scalar range it is stretched over; no range = the rendered field's range.
@@ -60,80 +56,70 @@ Vec3f toVec3(const py::handle &value, const char *what) {
 
 py::tuple fromVec3(Vec3f v) { return py::make_tuple(v.x, v.y, v.z); }
 
-/// One value per tuple: several components become their Euclidean magnitude, as the file readers do.
-ScalarField toField(const std::string &name, Centering centering, const py::handle &object) {
-  const InArray<double> array = py::cast<py::array>(object);
-  if (array.ndim() != 1 && array.ndim() != 2)
-    throw Error("uvr.Mesh", "", "field '" + name + "' must have 1 or 2 dimensions");
-  const size_t tuples = size_t(array.shape(0));
-  const size_t components = array.ndim() == 2 ? size_t(array.shape(1)) : 1;
-  ScalarField field{name, centering, UninitVector<float>(tuples)};
-  const double *data = array.data();
-  for (size_t i = 0; i < tuples; ++i) {
-    if (components == 1) {
-      field.values[i] = float(data[i]);
-      continue;
+/// Arrays a mesh is built from, kept alive while the library reads them in place.
+struct PyArrays {
+  MeshArrays arrays;
+  std::vector<py::array> owners;
+
+  /// float32 C-contiguous arrays are read in place; any other is converted to float64 once.
+  ArrayView view(const py::array &object, int components) {
+    if (py::isinstance<py::array_t<float>>(object) && (object.flags() & py::array::c_style)) {
+      owners.push_back(object);
+      return ArrayView(
+          std::span<const float>(static_cast<const float *>(object.data()), size_t(object.size())),
+          components);
     }
-    double sum = 0.0;
-    for (size_t c = 0; c < components; ++c)
-      sum += data[i * components + c] * data[i * components + c];
-    field.values[i] = float(std::sqrt(sum));
+    const InArray<double> array = object;
+    owners.push_back(array);
+    return ArrayView(std::span<const double>(array.data(), size_t(array.size())), components);
   }
-  return field;
-}
 
-void addFields(std::vector<ScalarField> &fields, Centering centering, const py::object &data) {
-  if (data.is_none())
-    return;
-  // PyVista's DataSetAttributes is a mapping with keys() and []; so is a dict.
-  for (const py::handle &key : data.attr("keys")())
-    fields.push_back(toField(py::str(key), centering, data[key]));
-}
-
-UninitVector<Vec3f> toPoints(const py::array &object) {
-  if (object.ndim() != 2 || object.shape(1) != 3)
-    throw Error("uvr.Mesh", "", "points must have shape (n, 3)");
-  UninitVector<Vec3f> points(size_t(object.shape(0)));
-  if (py::isinstance<py::array_t<float>>(object) && (object.flags() & py::array::c_style)) {
-    std::memcpy(points.data(), object.data(), points.size() * sizeof(Vec3f));
-    return points;
+  /// One value per tuple: several components become their Euclidean magnitude, as the file readers do.
+  void addFields(Centering centering, const py::object &data) {
+    if (data.is_none())
+      return;
+    // PyVista's DataSetAttributes is a mapping with keys() and []; so is a dict.
+    for (const py::handle &key : data.attr("keys")()) {
+      const std::string name = py::str(key);
+      const py::array array = py::cast<py::array>(data[key]);
+      if (array.ndim() != 1 && array.ndim() != 2)
+        throw Error("uvr.Mesh", "", "field '" + name + "' must have 1 or 2 dimensions");
+      const int components = array.ndim() == 2 ? int(array.shape(1)) : 1;
+      arrays.fields.push_back({name, centering, view(array, components)});
+    }
   }
-  const InArray<double> array = object;
-  const double *p = array.data();
-  for (size_t i = 0; i < points.size(); ++i)
-    points[i] = {float(p[3 * i]), float(p[3 * i + 1]), float(p[3 * i + 2])};
-  return points;
-}
+};
 
 /// Builds a mesh from VTK's arrays: `cells` is the flat [n, i0, i1, ...] layout, or the connectivity when
-/// `offsets` (cell count + 1 entries) are given. Cells, types and offsets are read in place when they are
-/// contiguous int64 / uint8 arrays.
+/// `offsets` (cell count + 1 entries) are given. Points, fields, cells, types and offsets are read in place
+/// when they are contiguous float32 / int64 / uint8 arrays.
 std::shared_ptr<PyMesh> makeMesh(const py::array &pointsArray, const py::array &cellsArray,
                                  const py::array &typesArray, const py::object &offsetsObject,
                                  const py::object &pointData, const py::object &cellData) {
   const std::string source = "uvr.Mesh";
-  UninitVector<Vec3f> points = toPoints(pointsArray);
+  PyArrays in;
+  if (pointsArray.ndim() != 2 || pointsArray.shape(1) != 3)
+    throw Error(source, "", "points must have shape (n, 3)");
+  in.arrays.points = in.view(pointsArray, 3);
   const InArray<int64_t> cells = cellsArray;
   const InArray<uint8_t> types = typesArray;
   if (cells.ndim() != 1 || types.ndim() != 1)
     throw Error(source, "", "cells and celltypes must be one-dimensional");
   const size_t cellCount = size_t(types.shape(0));
-
-  std::vector<ScalarField> fields;
-  addFields(fields, Centering::Point, pointData);
-  addFields(fields, Centering::Cell, cellData);
+  in.addFields(Centering::Point, pointData);
+  in.addFields(Centering::Cell, cellData);
 
   auto result = std::make_shared<PyMesh>();
-  result->source = source;
   const std::span<const int64_t> cellSpan(cells.data(), size_t(cells.shape(0)));
-  const std::span<const uint8_t> typeSpan(types.data(), cellCount);
+  in.arrays.types = std::span<const uint8_t>(types.data(), cellCount);
   if (!offsetsObject.is_none()) {
     const InArray<int64_t> offsets = py::cast<py::array>(offsetsObject);
     if (offsets.ndim() != 1 || size_t(offsets.shape(0)) != cellCount + 1)
       throw Error(source, "", "offsets must have one entry more than celltypes (VTK 9's layout)");
-    const CellArraysView view{{offsets.data(), cellCount + 1}, cellSpan, typeSpan};
+    in.arrays.offsets = std::span<const int64_t>(offsets.data(), cellCount + 1);
+    in.arrays.connectivity = cellSpan;
     py::gil_scoped_release release;
-    result->mesh = buildMesh(std::move(points), view, std::move(fields), source);
+    result->mesh = VolumeMesh::fromArrays(in.arrays, source);
     return result;
   }
   // The flat layout interleaves counts with point indices: split it into offsets and connectivity.
@@ -152,9 +138,10 @@ std::shared_ptr<PyMesh> makeMesh(const py::array &pointsArray, const py::array &
   if (at != cellSpan.size())
     throw Error(source, "",
                 "cells array holds more entries than its " + std::to_string(cellCount) + " cells");
+  in.arrays.offsets = offsets;
+  in.arrays.connectivity = connectivity;
   py::gil_scoped_release release;
-  result->mesh = buildMesh(std::move(points), CellArraysView{offsets, connectivity, typeSpan},
-                           std::move(fields), source);
+  result->mesh = VolumeMesh::fromArrays(in.arrays, source);
   return result;
 }
 
@@ -172,46 +159,48 @@ std::shared_ptr<PyMesh> load(const std::string &path, const std::optional<std::s
   if (timeStep && *timeStep != 0)
     throw Error(path, "", "time steps other than 0 are not supported by this build's readers");
   auto result = std::make_shared<PyMesh>();
-  result->source = path;
   {
     py::gil_scoped_release release;
-    result->mesh = loadMesh(path);
+    result->mesh = VolumeMesh::load(path);
   }
   if (field) {
-    const int index = chooseField(result->mesh, *field, path);
-    ScalarField kept = std::move(result->mesh.fields[size_t(index)]);
-    result->mesh.fields.clear();
-    result->mesh.fields.push_back(std::move(kept));
+    const int index = result->mesh.chooseField(*field);
+    result->mesh = std::move(result->mesh).withFields({index});
   }
   return result;
 }
 
 /// uvr's cells in VTK's flat layout [n, i0, i1, ...] with their type codes, in the mesh's order.
-std::pair<std::vector<int64_t>, std::vector<uint8_t>> flatCells(const Mesh &mesh) {
+std::pair<std::vector<int64_t>, std::vector<uint8_t>> flatCells(const VolumeMesh &mesh) {
   std::vector<int64_t> cells;
   std::vector<uint8_t> types;
-  cells.reserve(mesh.tets.size() + mesh.pyramids.size() + mesh.wedges.size() + mesh.hexes.size() +
-                mesh.cellCount());
+  const CellType order[] = {CellType::Tetra, CellType::Pyramid, CellType::Wedge, CellType::Hexahedron};
+  const int corners[] = {4, 5, 6, 8};
+  size_t indices = 0;
+  for (CellType type : order)
+    indices += mesh.cells(type).size();
+  cells.reserve(indices + mesh.cellCount());
   types.reserve(mesh.cellCount());
-  auto add = [&](const UninitVector<uint32_t> &ids, int corners, CellType type) {
-    for (size_t i = 0; i < ids.size(); i += size_t(corners)) {
-      cells.push_back(corners);
-      cells.insert(cells.end(), ids.begin() + ptrdiff_t(i), ids.begin() + ptrdiff_t(i) + corners);
-      types.push_back(uint8_t(type));
+  for (int t = 0; t < 4; ++t) {
+    const std::span<const uint32_t> ids = mesh.cells(order[t]);
+    for (size_t i = 0; i < ids.size(); i += size_t(corners[t])) {
+      cells.push_back(corners[t]);
+      cells.insert(cells.end(), ids.begin() + ptrdiff_t(i), ids.begin() + ptrdiff_t(i) + corners[t]);
+      types.push_back(uint8_t(order[t]));
     }
-  };
-  add(mesh.tets, 4, CellType::Tetra);
-  add(mesh.pyramids, 5, CellType::Pyramid);
-  add(mesh.wedges, 6, CellType::Wedge);
-  add(mesh.hexes, 8, CellType::Hexahedron);
+  }
   return {std::move(cells), std::move(types)};
 }
 
 py::dict fieldViews(const PyMesh &m, Centering centering, py::handle owner) {
   py::dict result;
-  for (const ScalarField &f : m.mesh.fields)
-    if (f.centering == centering)
-      result[py::str(f.name)] = viewArray(f.values.data(), {py::ssize_t(f.values.size())}, owner);
+  for (int i = 0; i < m.mesh.fieldCount(); ++i) {
+    const FieldInfo field = m.mesh.field(i);
+    if (field.centering == centering) {
+      const std::span<const float> values = m.mesh.fieldValues(i);
+      result[py::str(field.name)] = viewArray(values.data(), {py::ssize_t(values.size())}, owner);
+    }
+  }
   return result;
 }
 
@@ -244,22 +233,16 @@ PyTransferFunction transferFunctionFromArrays(const py::array &colorsObject,
   return tf;
 }
 
-bool sameColorMap(const ColorMap &a, const ColorMap &b) {
-  return a.rgbPoints == b.rgbPoints && a.opacityPoints == b.opacityPoints && a.colorSpace == b.colorSpace &&
-         a.nanColor.x == b.nanColor.x && a.nanColor.y == b.nanColor.y && a.nanColor.z == b.nanColor.z;
-}
-
 /// The renderer of one mesh and field, keeping the mesh alive and the last frame's statistics and samples.
 class PyRenderer {
 public:
   PyRenderer(std::shared_ptr<PyMesh> mesh, const std::optional<std::string> &field,
              const std::string &backend, uint32_t leafSize)
-      : mesh_(std::move(mesh)), leafSize_(leafSize) {
-    backendKind_ = parseBackend(backend);
-    fieldIndex_ = chooseField(mesh_->mesh, field.value_or(""), mesh_->source);
+      : mesh_(std::move(mesh)) {
+    backendKind_ = parseBackendOption(backend);
+    const int fieldIndex = mesh_->mesh.chooseField(field.value_or(""));
     py::gil_scoped_release release;
-    defaultStep_ = defaultStepSize(volumeStats(mesh_->mesh));
-    renderer_ = std::make_unique<Renderer>(mesh_->mesh, fieldIndex_, leafSize_);
+    renderer_ = std::make_unique<VolumeRenderer>(mesh_->mesh, fieldIndex, leafSize);
   }
 
   Camera defaultCamera(float fovy, float aspect) const {
@@ -289,23 +272,6 @@ public:
     return camera;
   }
 
-  void setTransferFunction(const PyTransferFunction &tf) {
-    const ScalarField &field = mesh_->mesh.fields[size_t(fieldIndex_)];
-    ValueRange range = valueRange(field);
-    if (tf.range)
-      range = {tf.range->first, tf.range->second};
-    if (appliedMap_ && sameColorMap(*appliedMap_, tf.map) && appliedRange_.min == range.min &&
-        appliedRange_.max == range.max)
-      return;
-    TransferFunction function(tf.map, range.min, range.max);
-    {
-      py::gil_scoped_release release;
-      renderer_->setTransferFunction(std::move(function));
-    }
-    appliedMap_ = tf.map;
-    appliedRange_ = range;
-  }
-
   py::array_t<uint8_t> render(const py::object &cameraObject, const std::optional<PyTransferFunction> &tf,
                               const std::string &mode, std::optional<float> s1, std::optional<float> s2,
                               std::optional<float> p, std::optional<float> unit, std::pair<int, int> size,
@@ -313,27 +279,31 @@ public:
     const auto [width, height] = size;
     if (width <= 0 || height <= 0 || width > 16384 || height > 16384)
       throw Error("size expects (width, height) with each side from 1 to 16384");
-    RenderSettings settings;
+    FrameSettings settings;
     settings.backend = backendKind_;
     settings.width = width;
     settings.height = height;
     settings.background = toVec3(background, "background");
-    settings.integrator = samplingSettings(parseMode(mode), defaultStep_, s1.value_or(0.f), s2.value_or(0.f),
-                                           p.value_or(0.f), unit.value_or(0.f));
+    settings.mode = parseMode(mode);
+    settings.s1 = s1.value_or(0.f);
+    settings.s2 = s2.value_or(0.f);
+    settings.p = p.value_or(0.f);
+    settings.unit = unit.value_or(0.f);
     const Camera camera = toCamera(cameraObject, float(width) / float(height));
     checkCamera(camera);
-    setTransferFunction(tf ? *tf : PyTransferFunction{chooseColorMap(""), std::nullopt});
+    const PyTransferFunction function = tf ? *tf : PyTransferFunction{chooseColorMap(""), std::nullopt};
+    const ValueRange range = function.range ? ValueRange{function.range->first, function.range->second}
+                                            : mesh_->mesh.fieldRange(renderer_->fieldIndex());
 
-    Frame frame;
-    double renderMs = 0.0;
+    FrameResult frame;
     {
       py::gil_scoped_release release;
+      // A function already set changes nothing; a new one recomputes the partitions' metadata alone.
+      renderer_->setTransferFunction(function.map, range);
       renderer_->prepare(backendKind_); // uploads the scene for CUDA once, outside the frame time
-      const Timer timer;
       frame = renderer_->render(camera, settings);
-      renderMs = timer.milliseconds();
     }
-    lastStats_ = frameStats(mesh_->mesh, *renderer_, settings, frame, renderMs, fieldIndex_);
+    lastStats_ = frameStatsJson(frame.stats);
     width_ = width;
     height_ = height;
 
@@ -366,18 +336,13 @@ public:
     return ownedArray(std::move(image.rgb), {height_, width_, 3});
   }
 
-  const std::string &fieldName() const { return mesh_->mesh.fields[size_t(fieldIndex_)].name; }
+  std::string fieldName() const { return mesh_->mesh.field(renderer_->fieldIndex()).name; }
   std::shared_ptr<PyMesh> mesh() const { return mesh_; }
 
 private:
   std::shared_ptr<PyMesh> mesh_;
   Backend backendKind_ = Backend::Cpu;
-  uint32_t leafSize_;
-  int fieldIndex_ = 0;
-  float defaultStep_ = 1.f;
-  std::unique_ptr<Renderer> renderer_;
-  std::optional<ColorMap> appliedMap_;
-  ValueRange appliedRange_;
+  std::unique_ptr<VolumeRenderer> renderer_;
   nlohmann::json lastStats_;
   std::vector<uint32_t> lastSamples_;
   int width_ = 0, height_ = 0;
@@ -441,12 +406,12 @@ PYBIND11_MODULE(uvr, m) {
       .def_static("from_pyvista", &meshFromPyvista, py::arg("grid"),
                   "From any object with PyVista's UnstructuredGrid attributes (points, cells, celltypes, "
                   "point_data, cell_data; offsets + cell_connectivity when present)")
-      .def_property_readonly(
-          "points",
-          [](py::object self) {
-            const PyMesh &m = self.cast<const PyMesh &>();
-            return viewArray(&m.mesh.points.data()->x, {py::ssize_t(m.mesh.points.size()), 3}, self);
-          })
+      .def_property_readonly("points",
+                             [](py::object self) {
+                               const PyMesh &m = self.cast<const PyMesh &>();
+                               const std::span<const Vec3f> points = m.mesh.points();
+                               return viewArray(&points.data()->x, {py::ssize_t(points.size()), 3}, self);
+                             })
       .def_property_readonly("cells",
                              [](const PyMesh &m) {
                                auto cells = flatCells(m.mesh).first;
@@ -465,13 +430,13 @@ PYBIND11_MODULE(uvr, m) {
       .def_property_readonly(
           "cell_data",
           [](py::object self) { return fieldViews(self.cast<const PyMesh &>(), Centering::Cell, self); })
-      .def_property_readonly("n_points", [](const PyMesh &m) { return m.mesh.points.size(); })
+      .def_property_readonly("n_points", [](const PyMesh &m) { return m.mesh.pointCount(); })
       .def_property_readonly("n_cells", [](const PyMesh &m) { return m.mesh.cellCount(); })
       .def_property_readonly("field_names",
                              [](const PyMesh &m) {
                                std::vector<std::string> names;
-                               for (const ScalarField &f : m.mesh.fields)
-                                 names.push_back(f.name);
+                               for (int i = 0; i < m.mesh.fieldCount(); ++i)
+                                 names.push_back(m.mesh.field(i).name);
                                return names;
                              })
       .def_property_readonly("bounds",
@@ -480,11 +445,11 @@ PYBIND11_MODULE(uvr, m) {
                                return py::make_tuple(b.lower.x, b.upper.x, b.lower.y, b.upper.y, b.lower.z,
                                                      b.upper.z);
                              })
-      .def_property_readonly("skipped_cells", [](const PyMesh &m) { return m.mesh.skippedCells; })
-      .def_property_readonly("inverted_cells", [](const PyMesh &m) { return m.mesh.invertedCells; })
+      .def_property_readonly("skipped_cells", [](const PyMesh &m) { return m.mesh.cellCounts().skipped; })
+      .def_property_readonly("inverted_cells", [](const PyMesh &m) { return m.mesh.cellCounts().inverted; })
       .def("__repr__", [](const PyMesh &m) {
         return py::str("uvr.Mesh({} points, {} cells, fields {})")
-            .format(m.mesh.points.size(), m.mesh.cellCount(), py::cast(m.mesh.fields.size()));
+            .format(m.mesh.pointCount(), m.mesh.cellCount(), py::cast(m.mesh.fieldCount()));
       });
 
   m.def("load", &load, py::arg("path"), py::arg("field") = py::none(), py::arg("time_step") = py::none(),

@@ -1,9 +1,8 @@
 // Transfer-function presets: ParaView's JSON, the built-in maps, and sampling as VTK samples them. The
 // reference values marked "VTK" were computed with VTK 9.1's vtkColorTransferFunction / vtkPiecewiseFunction.
-#include "render/color_map.h"
+#include "core/color_map.h"
 
 #include "core/error.h"
-#include "io/color_map_io.h"
 
 #include <gtest/gtest.h>
 

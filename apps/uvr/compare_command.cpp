@@ -1,7 +1,7 @@
 #include "commands.h"
 
-#include "core/error.h"
-#include "image/image.h"
+#include <uvr/error.h>
+#include <uvr/image.h>
 
 #include <nlohmann/json.hpp>
 

@@ -1,7 +1,8 @@
 #include "commands.h"
 
-#include "core/error.h"
-#include "io/mesh_io.h"
+#include <uvr/error.h>
+#include <uvr/io.h>
+#include <uvr/mesh.h>
 
 #include <cstdio>
 #include <memory>
@@ -18,37 +19,37 @@ struct ConvertOptions {
   int timeStep = 0;
 };
 
-/// Keeps the named fields in the order given; all of them when none is named.
-void chooseFields(Mesh &mesh, const std::vector<std::string> &names, const std::string &path) {
+/// The named fields in the order given; all of them when none is named.
+VolumeMesh chooseFields(VolumeMesh mesh, const std::vector<std::string> &names, const std::string &path) {
   if (names.empty())
-    return;
-  std::vector<ScalarField> chosen;
+    return mesh;
+  std::vector<int> chosen;
   for (const std::string &name : names) {
     const int index = mesh.findField(name);
     if (index < 0) {
       std::string available;
-      for (const ScalarField &field : mesh.fields)
-        available += (available.empty() ? "" : ", ") + field.name;
+      for (int i = 0; i < mesh.fieldCount(); ++i)
+        available += (available.empty() ? "" : ", ") + mesh.field(i).name;
       throw Error(path, "",
                   "no field '" + name + "' (the file has: " + (available.empty() ? "none" : available) + ")");
     }
-    chosen.push_back(mesh.fields[size_t(index)]);
+    chosen.push_back(index);
   }
-  mesh.fields = std::move(chosen);
+  return std::move(mesh).withFields(chosen);
 }
 
 void runConvert(const ConvertOptions &o) {
-  Mesh mesh = loadMesh(o.input, {o.timeStep});
-  chooseFields(mesh, o.fields, o.input);
-  if (o.zlib) {
-    if (!o.output.ends_with(".vtu") && !o.output.ends_with(".VTU"))
-      throw Error(o.output, "", "--zlib applies to .vtu output only");
-    writeVtu(o.output, mesh, true);
-  } else {
-    saveMesh(o.output, mesh);
-  }
-  std::fprintf(stderr, "uvr: wrote %s: %zu points, %llu cells, %zu fields\n", o.output.c_str(),
-               mesh.points.size(), static_cast<unsigned long long>(mesh.cellCount()), mesh.fields.size());
+  LoadOptions options;
+  options.timeStep = o.timeStep;
+  const VolumeMesh mesh = chooseFields(VolumeMesh::load(o.input, options), o.fields, o.input);
+  if (o.zlib && !o.output.ends_with(".vtu") && !o.output.ends_with(".VTU"))
+    throw Error(o.output, "", "--zlib applies to .vtu output only");
+  SaveOptions save;
+  save.compress = o.zlib;
+  mesh.save(o.output, save);
+  std::fprintf(stderr, "uvr: wrote %s: %llu points, %llu cells, %d fields\n", o.output.c_str(),
+               static_cast<unsigned long long>(mesh.pointCount()),
+               static_cast<unsigned long long>(mesh.cellCount()), mesh.fieldCount());
 }
 
 } // namespace

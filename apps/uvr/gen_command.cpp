@@ -1,16 +1,14 @@
 #include "commands.h"
 
-#include "core/error.h"
-#include "core/timer.h"
-#include "gen/mesher.h"
-#include "io/mesh_io.h"
-#include "io/volume_io.h"
-
-#include <tbb/info.h>
+#include <uvr/error.h>
+#include <uvr/gen.h>
+#include <uvr/mesh.h>
+#include <uvr/system.h>
 
 #include <cstdio>
 #include <map>
 #include <memory>
+#include <optional>
 
 namespace uvr {
 
@@ -29,11 +27,11 @@ struct GenCommandOptions {
   std::vector<double> spacing{1.0, 1.0, 1.0};
 };
 
-Volume readVolume(const GenCommandOptions &o) {
+VoxelVolume readVolume(const GenCommandOptions &o) {
   if (o.dims.empty()) {
     if (!o.type.empty())
       throw Error(o.volume, "", "--type applies to raw volumes, which need --dims");
-    return readNifti(o.volume);
+    return VoxelVolume::readNifti(o.volume);
   }
   static const std::map<std::string, VoxelType> types = {{"uint8", VoxelType::UInt8},
                                                          {"int16", VoxelType::Int16},
@@ -42,15 +40,15 @@ Volume readVolume(const GenCommandOptions &o) {
   const auto type = types.find(o.type);
   if (type == types.end())
     throw Error(o.volume, "", "a raw volume needs --type uint8, int16, uint16 or float32");
-  return readRawVolume(o.volume, {o.dims[0], o.dims[1], o.dims[2]}, type->second,
-                       {o.spacing[0], o.spacing[1], o.spacing[2]});
+  return VoxelVolume::readRaw(o.volume, {o.dims[0], o.dims[1], o.dims[2]}, type->second,
+                              {o.spacing[0], o.spacing[1], o.spacing[2]});
 }
 
 void runGen(const GenCommandOptions &o) {
   if (!o.output.ends_with(".umesh") && !o.output.ends_with(".vtu"))
     throw Error(o.output, "", "expected an output file ending in .umesh or .vtu");
   Timer loadTimer;
-  const Volume volume = readVolume(o);
+  const VoxelVolume volume = readVolume(o);
   const double loadMs = loadTimer.milliseconds();
 
   GenOptions options;
@@ -58,23 +56,25 @@ void runGen(const GenCommandOptions &o) {
   options.threshold = o.threshold;
   options.seed = o.seed;
   options.cellField = o.cellField;
-  const float threshold = effectiveThreshold(volume, options);
+  const float threshold = volume.threshold(options);
   options.threshold = threshold;
   Timer genTimer;
-  const Mesh mesh = o.cellType == "hex" ? generateHexMesh(volume, options) : generateTetMesh(volume, options);
+  const VolumeMesh mesh =
+      volume.generateMesh(options, o.cellType == "hex" ? CellType::Hexahedron : CellType::Tetra);
   const double genMs = genTimer.milliseconds();
   Timer saveTimer;
-  saveMesh(o.output, mesh);
+  mesh.save(o.output);
   const double saveMs = saveTimer.milliseconds();
 
   std::fprintf(stderr,
-               "uvr gen: %s: %llu %s, %zu points, field '%s'%s; threshold %g%s\n"
+               "uvr gen: %s: %llu %s, %llu points, field '%s'%s; threshold %g%s\n"
                "  read %.0f ms, generated in %.0f ms (%.2f M cells/s on %d threads), written in %.0f ms\n",
                o.output.c_str(), static_cast<unsigned long long>(mesh.cellCount()),
-               o.cellType == "hex" ? "hexahedra" : "tetrahedra", mesh.points.size(), volume.name.c_str(),
-               o.cellField ? (" and '" + volume.name + "_cell'").c_str() : "", threshold,
+               o.cellType == "hex" ? "hexahedra" : "tetrahedra",
+               static_cast<unsigned long long>(mesh.pointCount()), volume.name().c_str(),
+               o.cellField ? (" and '" + volume.name() + "_cell'").c_str() : "", threshold,
                o.threshold ? "" : " (Otsu)", loadMs, genMs, double(mesh.cellCount()) / genMs * 1e-3,
-               tbb::info::default_concurrency(), saveMs);
+               threadCount(), saveMs);
 }
 
 } // namespace

@@ -1,9 +1,8 @@
 #include "commands.h"
 
-#include "accel/partitions.h"
-#include "core/timer.h"
-#include "io/mesh_io.h"
-#include "mesh/mesh_stats.h"
+#include <uvr/io.h>
+#include <uvr/mesh.h>
+#include <uvr/system.h>
 
 #include <nlohmann/json.hpp>
 
@@ -32,38 +31,39 @@ double processCpuMs() {
 void runInfo(const InfoOptions &o) {
   const Timer loadTimer;
   const double cpuBefore = processCpuMs();
-  const Mesh mesh = loadMesh(o.mesh, {o.timeStep});
+  LoadOptions options;
+  options.timeStep = o.timeStep;
+  const VolumeMesh mesh = VolumeMesh::load(o.mesh, options);
   const double loadMs = loadTimer.milliseconds();
   const double loadCpuMs = processCpuMs() - cpuBefore;
   const int timeSteps = timeStepCount(o.mesh);
-  const VolumeStats volumes = volumeStats(mesh);
+  const VolumeStats volumes = mesh.volumeStats();
   const Box3f bounds = mesh.bounds();
-  const uint32_t partitions =
-      mesh.cellCount() > 0
-          ? buildPartitions(makeMeshView(mesh, -1), defaultLeafSize(mesh.cellCount())).count()
-          : 0;
+  const CellCounts cells = mesh.cellCounts();
+  const uint32_t partitions = mesh.partitionCount();
 
   nlohmann::json fields = nlohmann::json::array();
-  for (const ScalarField &field : mesh.fields) {
-    const ValueRange range = valueRange(field);
+  for (int i = 0; i < mesh.fieldCount(); ++i) {
+    const FieldInfo field = mesh.field(i);
+    const ValueRange range = mesh.fieldRange(i);
     fields.push_back({{"name", field.name},
                       {"centering", field.centering == Centering::Point ? "point" : "cell"},
                       {"min", range.min},
                       {"max", range.max}});
   }
   nlohmann::json info = {
-      {"points", mesh.points.size()},
+      {"points", mesh.pointCount()},
       {"cells", mesh.cellCount()},
       {"cell_types",
-       {{"tet", mesh.tetCount()},
-        {"hex", mesh.hexCount()},
-        {"wedge", mesh.wedgeCount()},
-        {"pyramid", mesh.pyramidCount()},
-        {"skipped", mesh.skippedCells}}},
+       {{"tet", cells.tet},
+        {"hex", cells.hex},
+        {"wedge", cells.wedge},
+        {"pyramid", cells.pyramid},
+        {"skipped", cells.skipped}}},
       {"fields", fields},
       {"bounds",
        {bounds.lower.x, bounds.upper.x, bounds.lower.y, bounds.upper.y, bounds.lower.z, bounds.upper.z}},
-      {"inverted_cells", mesh.invertedCells},
+      {"inverted_cells", cells.inverted},
       {"volume_min", volumes.min},
       {"volume_median", volumes.median},
       {"volume_max", volumes.max},
@@ -83,27 +83,26 @@ void runInfo(const InfoOptions &o) {
     return;
   }
   std::printf("%s\n", o.mesh.c_str());
-  std::printf("  points          %zu\n", mesh.points.size());
-  std::printf(
-      "  cells           %llu (tet %llu, hex %llu, wedge %llu, pyramid %llu; skipped %llu "
-      "lower-dimensional)\n",
-      static_cast<unsigned long long>(mesh.cellCount()), static_cast<unsigned long long>(mesh.tetCount()),
-      static_cast<unsigned long long>(mesh.hexCount()), static_cast<unsigned long long>(mesh.wedgeCount()),
-      static_cast<unsigned long long>(mesh.pyramidCount()),
-      static_cast<unsigned long long>(mesh.skippedCells));
-  for (const ScalarField &field : mesh.fields) {
-    const ValueRange range = valueRange(field);
+  std::printf("  points          %llu\n", static_cast<unsigned long long>(mesh.pointCount()));
+  std::printf("  cells           %llu (tet %llu, hex %llu, wedge %llu, pyramid %llu; skipped %llu "
+              "lower-dimensional)\n",
+              static_cast<unsigned long long>(mesh.cellCount()), static_cast<unsigned long long>(cells.tet),
+              static_cast<unsigned long long>(cells.hex), static_cast<unsigned long long>(cells.wedge),
+              static_cast<unsigned long long>(cells.pyramid), static_cast<unsigned long long>(cells.skipped));
+  for (int i = 0; i < mesh.fieldCount(); ++i) {
+    const FieldInfo field = mesh.field(i);
+    const ValueRange range = mesh.fieldRange(i);
     std::printf("  field           %s (%s) [%g, %g]\n", field.name.c_str(),
                 field.centering == Centering::Point ? "point" : "cell", range.min, range.max);
   }
   std::printf("  bounds          [%g, %g] x [%g, %g] x [%g, %g]\n", bounds.lower.x, bounds.upper.x,
               bounds.lower.y, bounds.upper.y, bounds.lower.z, bounds.upper.z);
-  std::printf("  inverted cells  %llu\n", static_cast<unsigned long long>(mesh.invertedCells));
+  std::printf("  inverted cells  %llu\n", static_cast<unsigned long long>(cells.inverted));
   std::printf("  cell volume     min %g, median %g, max %g\n", volumes.min, volumes.median, volumes.max);
   std::printf("  volume spread   max/min %g, p99/p1 %g (p1 %g, p99 %g)\n",
               volumes.min > 0 ? volumes.max / volumes.min : INFINITY,
               volumes.p1 > 0 ? volumes.p99 / volumes.p1 : INFINITY, volumes.p1, volumes.p99);
-  std::printf("  partitions      %u (leaf size %u)\n", partitions, defaultLeafSize(mesh.cellCount()));
+  std::printf("  partitions      %u (leaf size %u)\n", partitions, mesh.defaultLeafSize());
   std::printf("  time steps      %d (showing %d)\n", timeSteps, o.timeStep);
   std::printf("  load            %.1f ms (cpu %.1f ms)\n", loadMs, loadCpuMs);
 }

@@ -1,6 +1,7 @@
 // uvr: renders unstructured volumes with empty-space skipping and adaptive sampling.
 #include "commands.h"
-#include "core/error.h"
+
+#include <uvr/error.h>
 
 #include <cstdio>
 #include <new>

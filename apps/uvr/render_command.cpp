@@ -1,12 +1,12 @@
 #include "commands.h"
 #include "render_options.h"
 
-#include "core/error.h"
-#include "core/timer.h"
-#include "engine/render_defaults.h"
-#include "engine/renderer.h"
-#include "image/image.h"
-#include "io/color_map_io.h"
+#include "front_end.h"
+
+#include <uvr/color_map.h>
+#include <uvr/error.h>
+#include <uvr/image.h>
+#include <uvr/renderer.h>
 
 #include <nlohmann/json.hpp>
 
@@ -35,33 +35,30 @@ void writeStats(const std::string &path, const nlohmann::json &stats) {
 }
 
 void runRender(const RenderCommandOptions &o) {
-  RenderSettings settings = parseRenderSettings(o.view);
+  FrameSettings settings = parseFrameSettings(o.view);
   if (o.frames < 1)
     throw Error("--frames must be at least 1");
 
   const LoadedMesh loaded = loadForRendering(o.view);
-  const Mesh &mesh = loaded.mesh;
-  settings.integrator = chooseSampling(o.view, mesh);
+  const VolumeMesh &mesh = loaded.mesh;
 
-  Renderer renderer(mesh, loaded.fieldIndex, o.view.leafSize);
+  VolumeRenderer renderer(mesh, loaded.fieldIndex, o.view.leafSize);
   // The acceleration data is built first, outside the frame times (for CUDA on the GPU, so that the transfer
   // function's update is timed where the frames use it).
   renderer.prepare(settings.backend);
-  const ValueRange range = transferRange(o.view, mesh.fields[size_t(loaded.fieldIndex)]);
-  renderer.setTransferFunction(
-      TransferFunction(chooseColorMap(o.view.tf, o.view.tfName), range.min, range.max));
+  renderer.setTransferFunction(chooseColorMap(o.view.tf, o.view.tfName),
+                               transferRange(o.view, mesh, loaded.fieldIndex));
   const Camera camera = chooseCamera(o.view, mesh);
   // The stats take the frame's sample totals; per-pixel counts only the heat map (a copy from a GPU each).
   settings.keepOpacity = false;
   settings.keepSamplesPerPixel = !o.heatmap.empty();
 
   std::vector<double> times, kernelTimes;
-  Frame frame;
+  FrameResult frame;
   for (int i = 0; i < o.frames; ++i) {
-    const Timer timer;
     renderer.render(camera, settings, frame);
-    times.push_back(timer.milliseconds());
-    kernelTimes.push_back(frame.kernelMs);
+    times.push_back(frame.stats.renderMs);
+    kernelTimes.push_back(frame.stats.gpuKernelMs);
   }
   const auto median = [](std::vector<double> &v) {
     std::sort(v.begin(), v.end());
@@ -73,12 +70,14 @@ void runRender(const RenderCommandOptions &o) {
   if (!o.heatmap.empty())
     writePng(o.heatmap, heatmapImage(frame.samplesPerPixel, settings.width, settings.height));
 
-  nlohmann::json stats = frameStats(mesh, renderer, settings, frame, renderMs, loaded.fieldIndex);
+  FrameStats &frameStats = frame.stats;
+  frameStats.renderMs = renderMs;
   std::fprintf(stderr, "uvr: %s %dx%d, %llu cells, %u partitions, %.1f samples/pixel, %.1f ms/frame\n",
-               modeName(settings.integrator.mode), settings.width, settings.height,
-               static_cast<unsigned long long>(mesh.cellCount()), renderer.partitionCount(settings.backend),
-               stats["samples_per_pixel_mean"].get<double>(), renderMs);
+               modeName(settings.mode), settings.width, settings.height,
+               static_cast<unsigned long long>(mesh.cellCount()), frameStats.partitions,
+               frameStats.samplesPerPixelMean, renderMs);
   if (!o.stats.empty()) {
+    nlohmann::json stats = frameStatsJson(frameStats);
     stats["load_ms"] = loaded.loadMs;
     stats["time_step"] = o.view.timeStep;
     stats["frames"] = o.frames;

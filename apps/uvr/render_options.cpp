@@ -1,9 +1,9 @@
 #include "render_options.h"
 
-#include "core/error.h"
-#include "core/timer.h"
-#include "engine/render_defaults.h"
-#include "io/mesh_io.h"
+#include "front_end.h"
+
+#include <uvr/error.h>
+#include <uvr/system.h>
 
 #include <cstdio>
 #include <sstream>
@@ -64,33 +64,36 @@ void addRenderOptions(CLI::App *cmd, RenderOptions &o) {
 LoadedMesh loadForRendering(const RenderOptions &o) {
   LoadedMesh loaded;
   const Timer loadTimer;
-  loaded.mesh = loadMesh(o.mesh, {o.timeStep});
+  LoadOptions options;
+  options.timeStep = o.timeStep;
+  loaded.mesh = VolumeMesh::load(o.mesh, options);
   loaded.loadMs = loadTimer.milliseconds();
-  if (loaded.mesh.skippedCells > 0)
+  const uint64_t skipped = loaded.mesh.cellCounts().skipped;
+  if (skipped > 0)
     std::fprintf(stderr, "uvr: %s: skipped %llu lower-dimensional cells\n", o.mesh.c_str(),
-                 static_cast<unsigned long long>(loaded.mesh.skippedCells));
-  loaded.fieldIndex = chooseField(loaded.mesh, o.field, o.mesh);
+                 static_cast<unsigned long long>(skipped));
+  loaded.fieldIndex = loaded.mesh.chooseField(o.field);
   return loaded;
 }
 
-RenderSettings parseRenderSettings(const RenderOptions &o) {
-  RenderSettings settings;
+FrameSettings parseFrameSettings(const RenderOptions &o) {
+  FrameSettings settings;
   parseSize(o.size, settings.width, settings.height);
-  settings.backend = parseBackend(o.backend);
+  settings.backend = parseBackendOption(o.backend);
   settings.background = parseVector(o.background, "background");
-  settings.integrator.mode = parseMode(o.mode);
+  settings.mode = parseMode(o.mode);
+  settings.s1 = o.s1;
+  settings.s2 = o.s2;
+  settings.p = o.p;
+  settings.unit = o.unit;
   return settings;
 }
 
-IntegratorSettings chooseSampling(const RenderOptions &o, const Mesh &mesh) {
-  return samplingSettings(parseMode(o.mode), defaultStepSize(volumeStats(mesh)), o.s1, o.s2, o.p, o.unit);
+ValueRange transferRange(const RenderOptions &o, const VolumeMesh &mesh, int fieldIndex) {
+  return o.range.empty() ? mesh.fieldRange(fieldIndex) : ValueRange{o.range[0], o.range[1]};
 }
 
-ValueRange transferRange(const RenderOptions &o, const ScalarField &field) {
-  return o.range.empty() ? valueRange(field) : ValueRange{o.range[0], o.range[1]};
-}
-
-Camera chooseCamera(const RenderOptions &o, const Mesh &mesh) {
+Camera chooseCamera(const RenderOptions &o, const VolumeMesh &mesh) {
   int width, height;
   parseSize(o.size, width, height);
   Camera camera = frameBounds(mesh.bounds(), o.fovy, float(width) / float(height));

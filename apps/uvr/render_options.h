@@ -1,9 +1,9 @@
 // The options `uvr render` and `uvr view` share, and how they become the renderer's inputs.
 #pragma once
 
-#include "engine/renderer.h"
-#include "mesh/mesh.h"
-#include "mesh/mesh_stats.h"
+#include <uvr/camera.h>
+#include <uvr/mesh.h>
+#include <uvr/settings.h>
 
 #include <CLI/CLI.hpp>
 
@@ -34,23 +34,20 @@ void addRenderOptions(CLI::App *command, RenderOptions &options);
 
 /// A mesh loaded for rendering: lower-dimensional cells reported, the field chosen.
 struct LoadedMesh {
-  Mesh mesh;
+  VolumeMesh mesh;
   int fieldIndex = 0;
   double loadMs = 0.0;
 };
 LoadedMesh loadForRendering(const RenderOptions &options);
 
-/// Image size, background, backend and mode, checked before the mesh is loaded; sampling comes from
-/// chooseSampling.
-RenderSettings parseRenderSettings(const RenderOptions &options);
+/// Image size, background, backend, mode and sampling (0 for s1, s2, p and unit: the mesh's defaults),
+/// checked before the mesh is loaded.
+FrameSettings parseFrameSettings(const RenderOptions &options);
 
-/// s1, s2, p and unit, with the defaults for the mesh for what is not given.
-IntegratorSettings chooseSampling(const RenderOptions &options, const Mesh &mesh);
-
-/// The --range, or the field's range.
-ValueRange transferRange(const RenderOptions &options, const ScalarField &field);
+/// The --range, or the range of the mesh's field `fieldIndex`.
+ValueRange transferRange(const RenderOptions &options, const VolumeMesh &mesh, int fieldIndex);
 
 /// ParaView's reset camera for the mesh, with --eye, --at, --up and --fovy applied.
-Camera chooseCamera(const RenderOptions &options, const Mesh &mesh);
+Camera chooseCamera(const RenderOptions &options, const VolumeMesh &mesh);
 
 } // namespace uvr

@@ -1,9 +1,8 @@
 #include "commands.h"
 #include "render_options.h"
 
-#include "core/error.h"
-#include "engine/render_defaults.h"
-#include "io/color_map_io.h"
+#include <uvr/color_map.h>
+#include <uvr/error.h>
 
 #ifdef UVR_HAS_VIEWER
 #include "viewer.h"
@@ -24,22 +23,21 @@ struct ViewCommandOptions {
 
 void runView(const ViewCommandOptions &o) {
 #ifdef UVR_HAS_VIEWER
-  RenderSettings settings = parseRenderSettings(o.view);
+  const FrameSettings settings = parseFrameSettings(o.view);
   const LoadedMesh loaded = loadForRendering(o.view);
-  settings.integrator = chooseSampling(o.view, loaded.mesh);
 
   ViewerSetup setup;
-  setup.mesh = &loaded.mesh;
+  setup.mesh = loaded.mesh;
   setup.meshPath = o.view.mesh;
   setup.fieldIndex = loaded.fieldIndex;
   setup.leafSize = o.view.leafSize;
-  setup.defaultStep = defaultStepSize(volumeStats(loaded.mesh));
+  setup.defaultStep = loaded.mesh.defaultStep();
   setup.camera = chooseCamera(o.view, loaded.mesh);
-  setup.settings = settings;
+  setup.settings = withDefaultSampling(settings, setup.defaultStep);
   setup.colorMap = chooseColorMap(o.view.tf, o.view.tfName);
   if (!o.view.tf.empty() && std::filesystem::exists(o.view.tf))
     setup.presets = readColorMapPresets(o.view.tf);
-  setup.range = transferRange(o.view, loaded.mesh.fields[size_t(loaded.fieldIndex)]);
+  setup.range = transferRange(o.view, loaded.mesh, loaded.fieldIndex);
   setup.script = o.script;
   setup.screenshotPrefix = o.screenshot;
   runViewer(setup);
@@ -59,7 +57,7 @@ void addViewCommand(CLI::App &app) {
   CLI::App *cmd = app.add_subcommand("view", "Explore a mesh in a window");
   addRenderOptions(cmd, o.view);
   cmd->add_option("--script", o.script,
-                  "Replay camera moves and transfer-function edits from a file (docs/cli.md)");
+                  "Replay camera moves and transfer-function edits from a file (README)");
   cmd->add_option("--screenshot", o.screenshot, "Prefix of the PNGs the script's screenshot commands write");
   cmd->callback([options] { runView(*options); });
 }

@@ -1,7 +1,7 @@
 // Orbit, pan and zoom of a ParaView-style camera (eye, focal point, view-up), for mouse drags and scripts.
 #pragma once
 
-#include "render/camera.h"
+#include <uvr/camera.h>
 
 #include <cmath>
 

@@ -1,22 +1,13 @@
 #include "render_worker.h"
 
-#include "core/timer.h"
+#include "front_end.h"
 
 #include <algorithm>
 
 namespace uvr {
 
-namespace {
-
-bool sameColorMap(const ColorMap &a, const ColorMap &b) {
-  return a.rgbPoints == b.rgbPoints && a.opacityPoints == b.opacityPoints && a.colorSpace == b.colorSpace;
-}
-
-} // namespace
-
-RenderWorker::RenderWorker(Renderer &renderer, const Mesh &mesh, int fieldIndex, std::function<void()> wake)
-    : renderer_(renderer), mesh_(mesh), fieldIndex_(fieldIndex), wake_(std::move(wake)),
-      thread_([this] { loop(); }) {}
+RenderWorker::RenderWorker(VolumeRenderer &renderer, std::function<void()> wake)
+    : renderer_(renderer), wake_(std::move(wake)), thread_([this] { loop(); }) {}
 
 RenderWorker::~RenderWorker() {
   {
@@ -47,23 +38,18 @@ std::optional<ViewerFrame> RenderWorker::take() {
 }
 
 ViewerFrame RenderWorker::draw(const ViewState &state, uint64_t version, int scale) {
-  // Only this thread touches the renderer: a new transfer function recomputes the partitions' metadata alone.
-  if (!appliedMap_ || !sameColorMap(*appliedMap_, state.colorMap) || appliedRange_.min != state.range.min ||
-      appliedRange_.max != state.range.max) {
-    renderer_.setTransferFunction(TransferFunction(state.colorMap, state.range.min, state.range.max));
-    appliedMap_ = state.colorMap;
-    appliedRange_ = state.range;
-  }
-  RenderSettings settings = state.settings;
+  // Only this thread touches the renderer: a new transfer function recomputes the partitions' metadata alone,
+  // and the same one again nothing.
+  renderer_.setTransferFunction(state.colorMap, state.range);
+  FrameSettings settings = state.settings;
   settings.width = std::max(1, settings.width / scale);
   settings.height = std::max(1, settings.height / scale);
   ViewerFrame result;
   result.scale = scale;
   result.version = version;
   renderer_.prepare(settings.backend);
-  const Timer timer;
   result.frame = renderer_.render(state.camera, settings);
-  result.stats = frameStats(mesh_, renderer_, settings, result.frame, timer.milliseconds(), fieldIndex_);
+  result.stats = frameStatsJson(result.frame.stats);
   return result;
 }
 

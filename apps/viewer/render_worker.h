@@ -2,9 +2,9 @@
 // first at a quarter of the resolution, and at full resolution once it has stayed unchanged for a moment.
 #pragma once
 
-#include "engine/render_defaults.h"
-#include "engine/renderer.h"
-#include "mesh/mesh_stats.h"
+#include <uvr/camera.h>
+#include <uvr/color_map.h>
+#include <uvr/renderer.h>
 
 #include <nlohmann/json.hpp>
 
@@ -22,14 +22,14 @@ struct ViewState {
   Camera camera;
   ColorMap colorMap;
   ValueRange range;
-  RenderSettings settings; ///< at full resolution
+  FrameSettings settings; ///< at full resolution
 };
 
 struct ViewerFrame {
-  Frame frame;
+  FrameResult frame;
   int scale = 1;        ///< 1: full resolution; kPreviewScale: the preview
   uint64_t version = 0; ///< of the ViewState drawn
-  nlohmann::json stats; ///< frameStats of this frame
+  nlohmann::json stats; ///< frameStatsJson of this frame
   std::string error;    ///< why the frame could not be drawn (e.g. s2 < s1), else empty
 };
 
@@ -40,8 +40,8 @@ public:
   /// interrupted, so starting one between two mouse events would stall the interaction.
   static constexpr std::chrono::milliseconds kSettle{150};
 
-  /// `renderer` and `mesh` must outlive the worker; `wake` is called (from the worker) when a frame is ready.
-  RenderWorker(Renderer &renderer, const Mesh &mesh, int fieldIndex, std::function<void()> wake);
+  /// `renderer` must outlive the worker; `wake` is called (from the worker) when a frame is ready.
+  RenderWorker(VolumeRenderer &renderer, std::function<void()> wake);
   ~RenderWorker();
 
   /// Asks for a frame of `state`; returns its version.
@@ -54,12 +54,8 @@ private:
   ViewerFrame draw(const ViewState &state, uint64_t version, int scale);
   ViewerFrame drawOrReport(const ViewState &state, uint64_t version, int scale);
 
-  Renderer &renderer_;
-  const Mesh &mesh_;
-  int fieldIndex_;
+  VolumeRenderer &renderer_;
   std::function<void()> wake_;
-  std::optional<ColorMap> appliedMap_;
-  ValueRange appliedRange_;
 
   std::mutex mutex_;
   std::condition_variable changed_;

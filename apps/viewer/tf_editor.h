@@ -1,8 +1,8 @@
 // The viewer's transfer-function widgets, drawn with Dear ImGui.
 #pragma once
 
-#include "mesh/mesh_stats.h"
-#include "render/color_map.h"
+#include <uvr/color_map.h>
+#include <uvr/mesh.h>
 
 #include <imgui.h>
 

@@ -1,8 +1,11 @@
 #include "view_script.h"
 
-#include "core/error.h"
-#include "io/file_buffer.h"
+#include <uvr/error.h>
 
+#include <cerrno>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
 #include <map>
 #include <sstream>
 
@@ -26,8 +29,12 @@ const std::map<std::string, Signature> kCommands = {
 } // namespace
 
 std::vector<ScriptCommand> readViewScript(const std::string &path) {
-  const FileBuffer file = readFile(path);
-  std::istringstream in(std::string(file.chars(), file.size));
+  std::ifstream in(path);
+  if (!in)
+    throw Error(path, "", std::string("cannot open file: ") + std::strerror(errno));
+  std::error_code error;
+  if (!std::filesystem::is_regular_file(path, error))
+    throw Error(path, "", "cannot open file: not a regular file");
   std::vector<ScriptCommand> commands;
   std::string text;
   for (int lineNumber = 1; std::getline(in, text); ++lineNumber) {

@@ -5,10 +5,9 @@
 #include "tf_editor.h"
 #include "view_script.h"
 
-#include "core/error.h"
-#include "engine/render_defaults.h"
-#include "image/image.h"
-#include "io/color_map_io.h"
+#include <uvr/error.h>
+#include <uvr/image.h>
+#include <uvr/settings.h>
 
 #include <GLFW/glfw3.h>
 #include <backends/imgui_impl_glfw.h>
@@ -42,7 +41,7 @@ struct Controls {
 
 bool sameView(const ViewState &a, const ViewState &b) {
   const auto sameVec = [](Vec3f u, Vec3f v) { return u.x == v.x && u.y == v.y && u.z == v.z; };
-  const IntegratorSettings &i = a.settings.integrator, &j = b.settings.integrator;
+  const FrameSettings &i = a.settings, &j = b.settings;
   return sameVec(a.camera.eye, b.camera.eye) && sameVec(a.camera.at, b.camera.at) &&
          sameVec(a.camera.up, b.camera.up) && a.camera.fovy == b.camera.fovy &&
          a.colorMap.rgbPoints == b.colorMap.rgbPoints &&
@@ -91,16 +90,16 @@ Image readWindow(int width, int height) {
 class Viewer {
 public:
   Viewer(const ViewerSetup &setup, GLFWwindow *window)
-      : setup_(setup), window_(window), renderer_(*setup.mesh, setup.fieldIndex, setup.leafSize),
-        worker_(renderer_, *setup.mesh, setup.fieldIndex, [] { glfwPostEmptyEvent(); }) {
+      : setup_(setup), window_(window), renderer_(setup.mesh, setup.fieldIndex, setup.leafSize),
+        worker_(renderer_, [] { glfwPostEmptyEvent(); }) {
     controls_.camera = setup.camera;
     controls_.colorMap = setup.colorMap;
     makeOpacityPointsExplicit(controls_.colorMap);
     controls_.range = setup.range;
-    controls_.mode = setup.settings.integrator.mode;
-    controls_.s1 = setup.settings.integrator.s1;
-    controls_.s2 = setup.settings.integrator.s2;
-    controls_.p = setup.settings.integrator.p;
+    controls_.mode = setup.settings.mode;
+    controls_.s1 = setup.settings.s1;
+    controls_.s2 = setup.settings.s2;
+    controls_.p = setup.settings.p;
     presets_ = builtinColorMapNames();
     for (const ColorMap &map : setup.presets)
       presets_.push_back(map.name);
@@ -152,8 +151,11 @@ private:
     state.range = controls_.range;
     state.settings = setup_.settings;
     regionSize(state.settings.width, state.settings.height);
-    state.settings.integrator = samplingSettings(controls_.mode, setup_.defaultStep, controls_.s1,
-                                                 controls_.s2, controls_.p, setup_.settings.integrator.unit);
+    state.settings.mode = controls_.mode;
+    state.settings.s1 = controls_.s1;
+    state.settings.s2 = controls_.s2;
+    state.settings.p = controls_.p;
+    state.settings = withDefaultSampling(state.settings, setup_.defaultStep);
     return state;
   }
 
@@ -242,9 +244,9 @@ private:
     ImGui::Begin("uvr", nullptr,
                  ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoCollapse |
                      ImGuiWindowFlags_NoTitleBar);
-    const ScalarField &field = setup_.mesh->fields[size_t(setup_.fieldIndex)];
+    const FieldInfo field = setup_.mesh.field(setup_.fieldIndex);
     ImGui::TextWrapped("%s", setup_.meshPath.c_str());
-    ImGui::Text("%llu cells, field %s", static_cast<unsigned long long>(setup_.mesh->cellCount()),
+    ImGui::Text("%llu cells, field %s", static_cast<unsigned long long>(setup_.mesh.cellCount()),
                 field.name.c_str());
     ImGui::Separator();
 
@@ -287,7 +289,7 @@ private:
     ImGui::DragFloat("p", &controls_.p, 0.05f, 1.f, 16.f, "%.2f");
     controls_.s2 = std::max(controls_.s2, controls_.s1);
     if (ImGui::Button("Default sampling")) {
-      const IntegratorSettings d = samplingSettings(controls_.mode, step);
+      const FrameSettings d = withDefaultSampling({}, step);
       controls_.s1 = d.s1;
       controls_.s2 = d.s2;
       controls_.p = d.p;
@@ -310,7 +312,7 @@ private:
     ImGui::TextDisabled("Drag a point; double-click adds one,");
     ImGui::TextDisabled("right-click removes it");
     float range[2] = {controls_.range.min, controls_.range.max};
-    const ValueRange data = valueRange(field);
+    const ValueRange data = setup_.mesh.fieldRange(setup_.fieldIndex);
     const float speed = std::max(1e-6f, (data.max - data.min) * 0.002f);
     ImGui::SetNextItemWidth(kPanelWidth - 90.f);
     if (ImGui::DragFloat2("Range", range, speed, 0.f, 0.f, "%.4g") && range[1] > range[0])
@@ -376,8 +378,8 @@ private:
       draw->AddText({corner.x + 8.f, 8.f + 3.f * ImGui::GetTextLineHeight()}, IM_COL32(235, 235, 235, 255),
                     "the image");
     } else {
-      colorLegend(draw, controls_.colorMap, controls_.range,
-                  setup_.mesh->fields[size_t(setup_.fieldIndex)].name, corner, {kLegendWidth, float(height)});
+      colorLegend(draw, controls_.colorMap, controls_.range, setup_.mesh.field(setup_.fieldIndex).name,
+                  corner, {kLegendWidth, float(height)});
     }
   }
 
@@ -406,7 +408,7 @@ private:
       else if (c.name == "mode")
         controls_.mode = parseMode(c.words[0]);
       else if (c.name == "s1" || c.name == "s2" || c.name == "p") {
-        const IntegratorSettings d = samplingSettings(controls_.mode, setup_.defaultStep);
+        const FrameSettings d = withDefaultSampling({}, setup_.defaultStep);
         float &value = c.name == "s1" ? controls_.s1 : c.name == "s2" ? controls_.s2 : controls_.p;
         value = n[0] > 0.f ? n[0] : (c.name == "s1" ? d.s1 : c.name == "s2" ? d.s2 : d.p);
       } else if (c.name == "preset") {
@@ -448,7 +450,7 @@ private:
     writePng(base + ".png", readWindow(windowWidth, windowHeight));
     writePng(base + "-frame.png", controls_.heatmap ? heatmap() : shown_.frame.image);
     writeColorMapFile(base + "-tf.json", controls_.colorMap);
-    const IntegratorSettings &is = submitted_.settings.integrator;
+    const FrameSettings &is = submitted_.settings;
     const nlohmann::json view = {
         {"camera",
          {{"eye", vectorJson(controls_.camera.eye)},
@@ -475,7 +477,7 @@ private:
 
   ViewerSetup setup_;
   GLFWwindow *window_;
-  Renderer renderer_;
+  VolumeRenderer renderer_;
   RenderWorker worker_;
   FrameTexture texture_;
   Controls controls_;

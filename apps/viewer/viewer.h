@@ -2,10 +2,10 @@
 // colour legend. Nothing here exposes GLFW or OpenGL, so the command compiles without them.
 #pragma once
 
-#include "engine/renderer.h"
-#include "mesh/mesh.h"
-#include "mesh/mesh_stats.h"
-#include "render/color_map.h"
+#include <uvr/camera.h>
+#include <uvr/color_map.h>
+#include <uvr/mesh.h>
+#include <uvr/settings.h>
 
 #include <string>
 #include <vector>
@@ -13,13 +13,13 @@
 namespace uvr {
 
 struct ViewerSetup {
-  const Mesh *mesh = nullptr;
+  VolumeMesh mesh;
   std::string meshPath;
   int fieldIndex = 0;
   uint32_t leafSize = kAutoLeafSize;
-  float defaultStep = 1.f;       ///< defaultStepSize of the mesh: what s1 = 0 etc. mean
+  float defaultStep = 1.f;       ///< VolumeMesh::defaultStep: what s1 = 0 etc. mean
   Camera camera;                 ///< the starting camera
-  RenderSettings settings;       ///< size of the image region, background, sampling
+  FrameSettings settings;        ///< size of the image region, background, sampling (defaults filled in)
   ColorMap colorMap;             ///< the starting preset
   std::vector<ColorMap> presets; ///< the --tf file's presets, listed after the built-in ones
   ValueRange range;              ///< the starting range

@@ -11,6 +11,8 @@
 #include "render/pixel.h"
 #include "render/transfer_function.h"
 
+#include <uvr/settings.h>
+
 #include <cstddef>
 #include <cstdint>
 #include <memory>
@@ -19,14 +21,6 @@
 #include <vector>
 
 namespace uvr {
-
-enum class Backend : uint8_t { Cpu, Cuda };
-
-const char *backendName(Backend backend);
-/// Parses cpu|cuda; throws uvr::Error otherwise, and for cuda when this build has no CUDA backend.
-Backend parseBackend(const std::string &name);
-/// Whether this build has `backend`.
-bool backendBuilt(Backend backend);
 
 class RenderBackend {
 public:

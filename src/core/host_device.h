@@ -1,11 +1,7 @@
 // Marks functions that the CPU backend and the CUDA backend both compile.
 #pragma once
 
-#if defined(__CUDACC__)
-#define UVR_HOST_DEVICE __host__ __device__
-#else
-#define UVR_HOST_DEVICE
-#endif
+#include <uvr/host_device.h>
 
 // Inlined into each caller even where the compiler would rather call it: for the host's hot loops, where a
 // call leaves the caller's state in memory rather than registers. A GPU compiler inlines on its own.

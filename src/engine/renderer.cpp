@@ -7,27 +7,6 @@
 
 namespace uvr {
 
-const char *modeName(RenderMode mode) {
-  switch (mode) {
-  case RenderMode::Reference:
-    return "reference";
-  case RenderMode::Skip:
-    return "skip";
-  case RenderMode::Adaptive:
-    return "adaptive";
-  case RenderMode::Full:
-    return "full";
-  }
-  return "?";
-}
-
-RenderMode parseMode(const std::string &name) {
-  for (RenderMode mode : {RenderMode::Reference, RenderMode::Skip, RenderMode::Adaptive, RenderMode::Full})
-    if (name == modeName(mode))
-      return mode;
-  throw Error("unknown mode '" + name + "': expected reference, skip, adaptive or full");
-}
-
 Renderer::Renderer(const Mesh &mesh, int fieldIndex, uint32_t leafSize) : mesh_(mesh), leafSize_(leafSize) {
   if (fieldIndex < 0 || size_t(fieldIndex) >= mesh.fields.size())
     throw Error("the mesh has no scalar field to render");

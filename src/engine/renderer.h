@@ -17,13 +17,6 @@
 
 namespace uvr {
 
-/// A leaf size that asks for the default (defaultLeafSize).
-constexpr uint32_t kAutoLeafSize = 0;
-
-const char *modeName(RenderMode mode);
-/// Parses reference|skip|adaptive|full; throws uvr::Error otherwise.
-RenderMode parseMode(const std::string &name);
-
 struct RenderSettings {
   IntegratorSettings integrator;
   Vec3f background{0.f, 0.f, 0.f};

@@ -5,8 +5,9 @@
 #include "gen/volume.h"
 #include "mesh/mesh.h"
 
+#include <uvr/gen.h>
+
 #include <cstdint>
-#include <optional>
 
 namespace uvr {
 
@@ -17,13 +18,6 @@ inline uint64_t mix(uint64_t x) {
   x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
   return x ^ (x >> 31);
 }
-
-struct GenOptions {
-  uint64_t cells = 1000000;       ///< target cell count; the result lands within ±10 %
-  std::optional<float> threshold; ///< keep cells whose centroid value is ≥ this; default: Otsu's threshold
-  uint64_t seed = 0;              ///< seeds the jitter of the vertices
-  bool cellField = false;         ///< also store the value at each cell's centroid, as "<name>_cell"
-};
 
 /// Graded, conforming tetrahedral mesh of the part of `volume` that passes the threshold, with the volume
 /// sampled trilinearly at the vertices as a point field named after the volume.

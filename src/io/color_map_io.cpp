@@ -1,5 +1,5 @@
-// ParaView's colour-map preset files.
-#include "io/color_map_io.h"
+// ParaView's colour-map preset files, read and written (declared in <uvr/color_map.h>).
+#include "core/color_map.h"
 
 #include "core/error.h"
 #include "io/text_scan.h"
@@ -188,16 +188,6 @@ ColorMap readColorMapFile(const std::string &path, const std::string &name) {
     if (toLower(presetName(*presets[i])) == key)
       return parsePreset(*presets[i], i, path);
   throw Error(path, "", "no preset named \"" + name + "\" (presets found: " + listNames(presets) + ")");
-}
-
-ColorMap chooseColorMap(const std::string &tf, const std::string &tfName) {
-  if (tf.empty())
-    return builtinColorMap(builtinColorMapNames().front());
-  if (std::filesystem::exists(tf))
-    return readColorMapFile(tf, tfName);
-  if (tf.size() > 5 && tf.substr(tf.size() - 5) == ".json")
-    throw Error(tf, "", "cannot open transfer-function file");
-  return builtinColorMap(tf);
 }
 
 } // namespace uvr

@@ -3,15 +3,11 @@
 
 #include "mesh/mesh.h"
 
+#include <uvr/io.h>
+
 #include <string>
 
 namespace uvr {
-
-/// What a load may choose beyond the file: formats with time steps (Exodus, Gmsh data, series) read step
-/// `timeStep` (0-based).
-struct LoadOptions {
-  int timeStep = 0;
-};
 
 /// VTK XML unstructured grid: ascii, inline base64, appended raw or base64; zlib; UInt32/UInt64 headers;
 /// several Pieces (merged).
@@ -54,10 +50,6 @@ void writeVtu(const std::string &path, const Mesh &mesh, bool compress = false);
 /// timestep; several parts of one step are merged), or files numbered by a pattern such as data_%d.vtu,
 /// data_%04d.vtu or data_*.vtu (sorted by their numbers). `options.timeStep` picks the step.
 Mesh loadMesh(const std::string &path, const LoadOptions &options = {});
-
-/// The number of time steps `path` holds: of a series or a Gmsh file's data; 1 otherwise (Exodus too, for
-/// now).
-int timeStepCount(const std::string &path);
 
 /// Writes `mesh` in the format its extension names (.umesh, .vtu).
 void saveMesh(const std::string &path, const Mesh &mesh);

@@ -3,14 +3,13 @@
 
 #include "mesh/volume.h"
 
+#include <uvr/gen.h>
+
 #include <array>
 #include <cstdint>
 #include <string>
 
 namespace uvr {
-
-/// Element types of raw volumes (NIfTI files name theirs in the header).
-enum class VoxelType : uint8_t { UInt8, Int16, UInt16, Float32 };
 
 /// NIfTI-1 single-file volume (.nii, or gzip-compressed .nii.gz): uint8, int8, int16, uint16, int32, uint32,
 /// float32, float64 in either byte order; the sform when its code is set, else the qform, else pixdim.

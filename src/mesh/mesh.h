@@ -4,17 +4,14 @@
 #include "core/buffer.h"
 #include "core/vec.h"
 
+#include <uvr/mesh.h>
+
 #include <cstdint>
 #include <span>
 #include <string>
 #include <vector>
 
 namespace uvr {
-
-/// Volume cell types, numbered as VTK numbers them.
-enum class CellType : uint8_t { Tetra = 10, Hexahedron = 12, Wedge = 13, Pyramid = 14 };
-
-enum class Centering : uint8_t { Point, Cell };
 
 /// One scalar value per point or per cell. Arrays with several components become their magnitude.
 struct ScalarField {

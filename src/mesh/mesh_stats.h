@@ -9,16 +9,7 @@ namespace uvr {
 /// Volume of one cell (absolute; hexahedra, wedges and pyramids through a split into tetrahedra).
 double cellVolume(const MeshView &mesh, uint64_t cell);
 
-struct VolumeStats {
-  double min = 0.0, median = 0.0, max = 0.0;
-  double p1 = 0.0, p99 = 0.0; ///< 1st and 99th percentiles: their ratio shows how graded a mesh is
-};
-
 VolumeStats volumeStats(const Mesh &mesh);
-
-struct ValueRange {
-  float min = 0.f, max = 0.f;
-};
 
 /// Range of a field's finite values; {0, 0} when it has none.
 ValueRange valueRange(const ScalarField &field);

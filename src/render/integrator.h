@@ -13,16 +13,11 @@
 #include "render/boundary_crossings.h"
 #include "render/transfer_function.h"
 
+#include <uvr/settings.h>
+
 #include <cstdint>
 
 namespace uvr {
-
-enum class RenderMode : uint8_t {
-  Reference, ///< fixed step s1 over the mesh bounds, nothing skipped
-  Skip,      ///< fixed step s1, transparent partitions and empty space skipped
-  Adaptive,  ///< step per partition from its colour variance, nothing skipped
-  Full       ///< both
-};
 
 /// Whether `mode` skips transparent partitions and empty space.
 UVR_HOST_DEVICE constexpr bool skipsSpace(RenderMode mode) {

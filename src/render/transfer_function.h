@@ -5,7 +5,7 @@
 #include "accel/partitions.h"
 #include "core/host_device.h"
 #include "core/vec.h"
-#include "render/color_map.h"
+#include "core/color_map.h"
 
 #include <vector>
 

@@ -1,6 +1,6 @@
 // Transfer-function presets. Colours are interpolated as VTK's vtkColorTransferFunction does it and opacity
 // as vtkPiecewiseFunction does it, so a preset looks here as it does in ParaView.
-#include "render/color_map.h"
+#include "core/color_map.h"
 
 #include "core/error.h"
 

@@ -1,0 +1,149 @@
+// Volume meshes: tetrahedra, hexahedra, wedges and pyramids with scalar fields per point or per cell, loaded
+// from files or built from arrays laid out as VTK lays them out (vtkUnstructuredGrid, PyVista).
+#pragma once
+
+#include <uvr/io.h>
+#include <uvr/settings.h>
+#include <uvr/vec.h>
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <string>
+#include <vector>
+
+namespace uvr {
+
+/// Volume cell types, numbered as VTK numbers them.
+enum class CellType : uint8_t { Tetra = 10, Hexahedron = 12, Wedge = 13, Pyramid = 14 };
+
+enum class Centering : uint8_t { Point, Cell };
+
+struct ValueRange {
+  float min = 0.f, max = 0.f;
+};
+
+/// Cell volumes (absolute; hexahedra, wedges and pyramids through a split into tetrahedra).
+struct VolumeStats {
+  double min = 0.0, median = 0.0, max = 0.0;
+  double p1 = 0.0, p99 = 0.0; ///< 1st and 99th percentiles: their ratio shows how graded a mesh is
+};
+
+struct CellCounts {
+  uint64_t tet = 0, hex = 0, wedge = 0, pyramid = 0;
+  uint64_t skipped = 0;  ///< lower-dimensional cells of the input that were not kept
+  uint64_t inverted = 0; ///< cells whose winding was reversed on load (they render as the others)
+
+  uint64_t total() const { return tet + hex + wedge + pyramid; }
+};
+
+struct FieldInfo {
+  std::string name;
+  Centering centering = Centering::Point;
+};
+
+/// Numbers viewed in place, float or double, `components` per tuple.
+struct ArrayView {
+  const void *data = nullptr;
+  size_t tuples = 0;
+  int components = 1;
+  bool isDouble = false;
+
+  ArrayView() = default;
+  /// `values` holds `values.size() / components` tuples.
+  ArrayView(std::span<const float> values, int components = 1)
+      : data(values.data()), tuples(components > 0 ? values.size() / size_t(components) : 0),
+        components(components) {}
+  ArrayView(std::span<const double> values, int components = 1)
+      : data(values.data()), tuples(components > 0 ? values.size() / size_t(components) : 0),
+        components(components), isDouble(true) {}
+};
+
+/// A field given as an array: one tuple per point or per cell. Several components are kept as their
+/// Euclidean magnitude.
+struct FieldArray {
+  std::string name;
+  Centering centering = Centering::Point;
+  ArrayView values;
+};
+
+/// A mesh as VTK 9 stores an unstructured grid, viewed in place (vtkUnstructuredGrid's arrays; PyVista's
+/// points, offsets, cell_connectivity, celltypes, point_data and cell_data).
+struct MeshArrays {
+  ArrayView points;                      ///< 3 components per point
+  std::span<const int64_t> offsets;      ///< cell count + 1 entries, offsets[0] == 0
+  std::span<const int64_t> connectivity; ///< point indices, cell after cell
+  std::span<const uint8_t> types;        ///< VTK cell type codes; cells of other dimensions are skipped
+  std::vector<FieldArray> fields;
+};
+
+namespace detail {
+struct Access;
+}
+
+/// A volume mesh, shared: copies are cheap and refer to the same data, which nothing changes after it is
+/// made (withFields makes a new mesh). Cells are held grouped by type (tets, pyramids, wedges, hexahedra),
+/// each wound as VTK expects, and ordered spatially; points are numbered by first use; fields follow.
+/// Errors name the mesh's source: its file, or what fromArrays was given.
+class VolumeMesh {
+public:
+  /// An empty mesh: no points, cells or fields.
+  VolumeMesh();
+
+  /// Reads a mesh file of any format uvr reads (see <uvr/io.h>). Throws uvr::Error naming the file and the
+  /// position in it.
+  static VolumeMesh load(const std::string &path, const LoadOptions &options = {});
+  /// Builds a mesh from arrays, copying each once. Throws uvr::Error naming `source` for cells with bad
+  /// offsets, types or point indices, and fields of the wrong length.
+  static VolumeMesh fromArrays(const MeshArrays &arrays, const std::string &source = "uvr::VolumeMesh");
+
+  /// Writes the mesh in the format the extension names (.vtu, .umesh; umesh holds point fields only).
+  void save(const std::string &path, const SaveOptions &options = {}) const;
+
+  /// The file it was read from, or the source fromArrays was given.
+  const std::string &source() const;
+
+  uint64_t pointCount() const;
+  uint64_t cellCount() const;
+  CellCounts cellCounts() const;
+  Box3f bounds() const;
+
+  /// The points, in the mesh's order.
+  std::span<const Vec3f> points() const;
+  /// The point indices of the cells of `type`, 4, 5, 6 or 8 per cell (tet, pyramid, wedge, hexahedron) in
+  /// VTK's corner order. A cell's index is its position in the order tets, pyramids, wedges, hexahedra.
+  std::span<const uint32_t> cells(CellType type) const;
+
+  int fieldCount() const;
+  FieldInfo field(int index) const;
+  /// One value per point or per cell, in the mesh's order.
+  std::span<const float> fieldValues(int index) const;
+  /// The range of the field's finite values; {0, 0} when it has none.
+  ValueRange fieldRange(int index) const;
+  /// The index of the first field named `name`, or -1.
+  int findField(const std::string &name) const;
+  /// The index of the field to render: `name`, or the first field when empty. Throws uvr::Error naming the
+  /// source when the mesh has no volume cells or no fields, or no field `name` (listing the fields).
+  int chooseField(const std::string &name) const;
+  /// A mesh with only the fields `indices`, in that order. Moves the data when this is its only handle.
+  VolumeMesh withFields(const std::vector<int> &indices) &&;
+
+  /// Computed once per mesh.
+  VolumeStats volumeStats() const;
+  /// The default step s1: the edge of a cube of the median cell volume, about half a typical tet's edge, so
+  /// that a ray takes about two samples per cell it crosses.
+  float defaultStep() const;
+  /// The most cells per partition that kAutoLeafSize stands for.
+  uint32_t defaultLeafSize() const;
+  /// The partitions a renderer makes of this mesh with `leafSize` (kAutoLeafSize: the default); builds them.
+  uint32_t partitionCount(uint32_t leafSize = kAutoLeafSize) const;
+
+private:
+  struct Impl;
+  friend struct detail::Access;
+  explicit VolumeMesh(std::shared_ptr<Impl> impl);
+  std::shared_ptr<Impl> impl_;
+};
+
+} // namespace uvr

@@ -1,0 +1,92 @@
+// The volume renderer: acceleration data for one mesh and field, built once and kept across camera and
+// transfer-function changes, and frames drawn from it (paper: Morrical et al., IEEE VIS 2019).
+#pragma once
+
+#include <uvr/camera.h>
+#include <uvr/color_map.h>
+#include <uvr/image.h>
+#include <uvr/mesh.h>
+#include <uvr/settings.h>
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace uvr {
+
+/// What one frame cost and took, with the settings it was drawn with (defaults filled in).
+struct FrameStats {
+  RenderMode mode = RenderMode::Full;
+  int width = 0, height = 0;
+  uint64_t cells = 0;
+  uint32_t partitions = 0;
+  uint32_t partitionsSkipped = 0; ///< fully transparent under the transfer function; 0 unless skipping
+  uint64_t samplesTotal = 0;
+  double samplesPerPixelMean = 0.0;
+  uint32_t samplesPerPixelMax = 0;
+  double buildMs = 0.0;    ///< the acceleration build for the backend used
+  double tfUpdateMs = 0.0; ///< the last transfer-function change
+  double renderMs = 0.0;   ///< this frame, wall clock
+  float s1 = 0.f, s2 = 0.f, p = 0.f, unit = 0.f;
+  uint32_t leafSize = 0;
+  std::string field;
+  ValueRange range; ///< what the transfer function spans
+  Backend backend = Backend::Cpu;
+  int threads = 0; ///< of the host
+  // CUDA only: empty or 0 on the CPU.
+  std::string device;
+  uint64_t gpuMemoryBytes = 0; ///< all the renderer holds on the GPU
+  uint64_t gpuSceneBytes = 0;  ///< without the frame buffers
+  double gpuKernelMs = 0.0;    ///< the frame's GPU work, without the copies to the host
+  std::vector<std::pair<std::string, double>> gpuBuildSteps; ///< the GPU build's steps and their ms
+};
+
+struct FrameResult {
+  Image image;                           ///< RGB composited over the background, top row first
+  std::vector<float> opacity;            ///< accumulated opacity per pixel, row-major; empty unless kept
+  std::vector<uint32_t> samplesPerPixel; ///< row-major; empty unless kept
+  FrameStats stats;
+};
+
+/// Renders one field of a mesh. Built lazily, per backend, where it is first needed (prepare): tet
+/// adjacency, point-location hierarchy, occupancy and seed grids, and the partitions whose per-partition
+/// opacity and colour variance each transfer-function change recomputes (in time independent of the cell
+/// count). Not thread-safe: use one from one thread at a time.
+class VolumeRenderer {
+public:
+  /// Renders field `fieldIndex` of `mesh` (see VolumeMesh::chooseField) in partitions of at most `leafSize`
+  /// cells. Keeps the mesh.
+  VolumeRenderer(VolumeMesh mesh, int fieldIndex, uint32_t leafSize = kAutoLeafSize);
+  ~VolumeRenderer();
+  VolumeRenderer(VolumeRenderer &&) noexcept;
+  VolumeRenderer &operator=(VolumeRenderer &&) noexcept;
+
+  const VolumeMesh &mesh() const;
+  int fieldIndex() const;
+  /// The most cells per partition, as given or by default.
+  uint32_t leafSize() const;
+
+  /// Colours and opacities of `map` stretched over `range` of the field's values (ParaView's way); needed
+  /// before the first frame. Recomputes the partitions' metadata only, on the GPU once CUDA is prepared;
+  /// the same function and range again change nothing.
+  void setTransferFunction(const ColorMap &map, ValueRange range);
+
+  /// Builds what `backend` needs ahead of the first frame, so that frame times exclude it: the acceleration
+  /// data on the host, or on the GPU (uploading the mesh and any transfer function). Throws uvr::Error when
+  /// the backend is not in this build or no GPU is found.
+  void prepare(Backend backend);
+
+  /// Draws a frame: one ray per pixel through its centre. Throws uvr::Error for invalid sampling settings
+  /// or size, a camera whose view direction and view-up are collinear, or no transfer function yet.
+  FrameResult render(const Camera &camera, const FrameSettings &settings);
+  /// The same into `frame`, whose buffers are reused when their size matches (no allocation per frame).
+  void render(const Camera &camera, const FrameSettings &settings, FrameResult &frame);
+
+private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+} // namespace uvr

@@ -1,0 +1,59 @@
+// How a frame is drawn: the sampling mode and steps (paper §2.3-2.4), image size, background and backend.
+#pragma once
+
+#include <uvr/vec.h>
+
+#include <cstdint>
+#include <string>
+
+namespace uvr {
+
+enum class RenderMode : uint8_t {
+  Reference, ///< fixed step s1 over the mesh bounds, nothing skipped
+  Skip,      ///< fixed step s1, transparent partitions and empty space skipped
+  Adaptive,  ///< step per partition from its colour variance, nothing skipped
+  Full       ///< both
+};
+
+/// reference, skip, adaptive or full.
+const char *modeName(RenderMode mode);
+/// Parses reference|skip|adaptive|full; throws uvr::Error otherwise.
+RenderMode parseMode(const std::string &name);
+
+enum class Backend : uint8_t {
+  Cpu, ///< all cores
+  Cuda ///< one GPU; see backendAvailable
+};
+
+/// cpu or cuda.
+const char *backendName(Backend backend);
+/// Parses cpu|cuda; throws uvr::Error otherwise.
+Backend parseBackend(const std::string &name);
+/// Whether this build of the library has `backend` (CUDA needs the toolkit at build time; a GPU is then
+/// looked for when the backend is first prepared).
+bool backendAvailable(Backend backend);
+
+/// A leaf size that asks for the default: the cell count / 256, at least 64 (about 256 partitions).
+constexpr uint32_t kAutoLeafSize = 0;
+
+/// Sampling, image and backend of a frame. A step, power or unit of 0 asks for the mesh's default
+/// (withDefaultSampling).
+struct FrameSettings {
+  RenderMode mode = RenderMode::Full;
+  float s1 = 0.f;   ///< smallest (and the fixed) step; default: the mesh's default step
+  float s2 = 0.f;   ///< largest adaptive step; default: 8 x the default step, at least s1
+  float p = 0.f;    ///< adaptive power, >= 1; default 4
+  float unit = 0.f; ///< opacity unit distance; default: the default step
+  int width = 1024;
+  int height = 1024;
+  Vec3f background{0.f, 0.f, 0.f}; ///< RGB in [0, 1], under the volume
+  Backend backend = Backend::Cpu;
+  bool keepOpacity = true;         ///< return the accumulated opacity per pixel
+  bool keepSamplesPerPixel = true; ///< return the samples taken per pixel
+};
+
+/// `settings` with its defaults filled in (0 for s1, s2, p or unit) for a mesh of default step `defaultStep`
+/// (VolumeMesh::defaultStep): s1 and unit = defaultStep, s2 = 8 x defaultStep (at least s1), p = 4.
+FrameSettings withDefaultSampling(FrameSettings settings, float defaultStep);
+
+} // namespace uvr

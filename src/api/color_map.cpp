@@ -1,0 +1,33 @@
+#include "core/error.h"
+
+#include <uvr/color_map.h>
+
+#include <filesystem>
+
+namespace uvr {
+
+ColorMap chooseColorMap(const std::string &tf, const std::string &tfName) {
+  if (tf.empty())
+    return builtinColorMap(builtinColorMapNames().front());
+  if (std::filesystem::exists(tf))
+    return readColorMapFile(tf, tfName);
+  if (tf.size() > 5 && tf.substr(tf.size() - 5) == ".json")
+    throw Error(tf, "", "cannot open transfer-function file");
+  return builtinColorMap(tf);
+}
+
+ColorMap colorMapFromTable(std::span<const Vec4f> rgba) {
+  if (rgba.size() < 2)
+    throw Error("a transfer-function table needs at least 2 entries");
+  ColorMap map;
+  map.name = "table";
+  const size_t last = rgba.size() - 1;
+  for (size_t i = 0; i < rgba.size(); ++i) {
+    const float x = float(i) / float(last);
+    map.rgbPoints.insert(map.rgbPoints.end(), {x, rgba[i].x, rgba[i].y, rgba[i].z});
+    map.opacityPoints.insert(map.opacityPoints.end(), {x, rgba[i].w, 0.5f, 0.f}); // linear in between
+  }
+  return map;
+}
+
+} // namespace uvr

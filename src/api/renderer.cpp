@@ -1,0 +1,123 @@
+#include "api/access.h"
+#include "engine/renderer.h"
+#include "core/error.h"
+
+#include <uvr/renderer.h>
+#include <uvr/system.h>
+
+#include <optional>
+
+namespace uvr {
+
+namespace {
+
+bool sameColorMap(const ColorMap &a, const ColorMap &b) {
+  return a.rgbPoints == b.rgbPoints && a.opacityPoints == b.opacityPoints && a.colorSpace == b.colorSpace &&
+         a.nanColor.x == b.nanColor.x && a.nanColor.y == b.nanColor.y && a.nanColor.z == b.nanColor.z;
+}
+
+} // namespace
+
+struct VolumeRenderer::Impl {
+  VolumeMesh mesh; // keeps the data the renderer refers to
+  int fieldIndex;
+  Renderer renderer;
+  std::optional<ColorMap> map; // the transfer function set last, and its range
+  ValueRange range;
+
+  Impl(VolumeMesh handle, int field, uint32_t leafSize)
+      : mesh(std::move(handle)), fieldIndex(field), renderer(detail::Access::mesh(mesh), field, leafSize) {}
+};
+
+VolumeRenderer::VolumeRenderer(VolumeMesh mesh, int fieldIndex, uint32_t leafSize)
+    : impl_(std::make_unique<Impl>(std::move(mesh), fieldIndex, leafSize)) {}
+
+VolumeRenderer::~VolumeRenderer() = default;
+VolumeRenderer::VolumeRenderer(VolumeRenderer &&) noexcept = default;
+VolumeRenderer &VolumeRenderer::operator=(VolumeRenderer &&) noexcept = default;
+
+const VolumeMesh &VolumeRenderer::mesh() const { return impl_->mesh; }
+int VolumeRenderer::fieldIndex() const { return impl_->fieldIndex; }
+uint32_t VolumeRenderer::leafSize() const { return impl_->renderer.leafSize(); }
+
+void VolumeRenderer::setTransferFunction(const ColorMap &map, ValueRange range) {
+  if (impl_->map && sameColorMap(*impl_->map, map) && impl_->range.min == range.min &&
+      impl_->range.max == range.max)
+    return;
+  impl_->renderer.setTransferFunction(TransferFunction(map, range.min, range.max));
+  impl_->map = map;
+  impl_->range = range;
+}
+
+void VolumeRenderer::prepare(Backend backend) { impl_->renderer.prepare(backend); }
+
+FrameResult VolumeRenderer::render(const Camera &camera, const FrameSettings &settings) {
+  FrameResult frame;
+  render(camera, settings, frame);
+  return frame;
+}
+
+void VolumeRenderer::render(const Camera &camera, const FrameSettings &settings, FrameResult &result) {
+  if (length(cross(camera.at - camera.eye, camera.up)) == 0.f)
+    throw Error("the camera's view direction and view-up are collinear");
+  // The mesh's default step costs a pass over its cells, once: only where a setting asks for it.
+  const bool defaults = !(settings.s1 > 0.f && settings.s2 > 0.f && settings.p > 0.f && settings.unit > 0.f);
+  const FrameSettings s = defaults ? withDefaultSampling(settings, impl_->mesh.defaultStep()) : settings;
+  RenderSettings internal;
+  internal.integrator.mode = s.mode;
+  internal.integrator.s1 = s.s1;
+  internal.integrator.s2 = s.s2;
+  internal.integrator.p = s.p;
+  internal.integrator.unit = s.unit;
+  internal.background = s.background;
+  internal.width = s.width;
+  internal.height = s.height;
+  internal.backend = s.backend;
+  internal.keepOpacity = s.keepOpacity;
+  internal.keepSamplesPerPixel = s.keepSamplesPerPixel;
+
+  Frame frame; // the result's buffers, to be reused
+  frame.image = std::move(result.image);
+  frame.opacity = std::move(result.opacity);
+  frame.samplesPerPixel = std::move(result.samplesPerPixel);
+  Renderer &renderer = impl_->renderer;
+  const Timer timer;
+  renderer.render(camera, internal, frame);
+  const double renderMs = timer.milliseconds();
+  result.image = std::move(frame.image);
+  result.opacity = std::move(frame.opacity);
+  result.samplesPerPixel = std::move(frame.samplesPerPixel);
+
+  FrameStats &stats = result.stats;
+  stats = FrameStats{};
+  stats.mode = s.mode;
+  stats.width = s.width;
+  stats.height = s.height;
+  stats.cells = impl_->mesh.cellCount();
+  stats.partitions = renderer.partitionCount(s.backend);
+  stats.partitionsSkipped = skipsSpace(s.mode) ? renderer.transparentPartitions() : 0;
+  stats.samplesTotal = frame.samplesTotal;
+  stats.samplesPerPixelMean = double(frame.samplesTotal) / (double(s.width) * double(s.height));
+  stats.samplesPerPixelMax = frame.samplesMax;
+  stats.buildMs = renderer.buildMs(s.backend);
+  stats.tfUpdateMs = renderer.tfUpdateMs();
+  stats.renderMs = renderMs;
+  stats.s1 = s.s1;
+  stats.s2 = s.s2;
+  stats.p = s.p;
+  stats.unit = s.unit;
+  stats.leafSize = renderer.leafSize();
+  stats.field = impl_->mesh.field(impl_->fieldIndex).name;
+  stats.range = {renderer.transferFunction().valueMin(), renderer.transferFunction().valueMax()};
+  stats.backend = s.backend;
+  stats.threads = threadCount();
+  if (s.backend == Backend::Cuda) {
+    stats.device = renderer.deviceName();
+    stats.gpuMemoryBytes = renderer.deviceMemoryBytes();
+    stats.gpuSceneBytes = renderer.deviceSceneBytes();
+    stats.gpuKernelMs = frame.kernelMs;
+    stats.gpuBuildSteps = renderer.deviceBuildSteps();
+  }
+}
+
+} // namespace uvr
