@@ -51,9 +51,9 @@ SampleTotals renderCpu(const SceneView &scene, std::span<const uint32_t> boundar
                 crossings ? pixelCrossings(crossingStart.data(), crossingKeys.data(), pixel)
                           : BoundaryCrossings{};
             // A ray that crosses no boundary face is done at once.
-            const RayResult result = along.none()
-                                         ? RayResult{}
-                                         : integrateRay(scene, settings.integrator, ray, hint, along, trail);
+            const RayResult result = along.none() ? RayResult{}
+                                                  : integrateRay<HostSampling>(scene, settings.integrator,
+                                                                               ray, hint, along, trail);
             ray = next;
             target.store(x, y, result);
             tileSamples.total += result.samples;
