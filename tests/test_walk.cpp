@@ -1,16 +1,17 @@
 // The tet walk that locates samples along a ray, with the weights a ray carries from sample to sample.
+#include "accel/sampler.h"
 #include "mesh/cell.h"
 #include "mesh/cell_neighbors.h"
 #include "mesh/mesh.h"
 #include "mesh/procedural_mesh.h"
 #include "mesh/tet_affine.h"
 #include "mesh/tet_neighbors.h"
-#include "render/integrator.h"
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <random>
+#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -48,43 +49,52 @@ RayInCube randomRayInCube(std::mt19937 &random) {
 
 // Samples a short step apart along random rays, each located from the previous one's cell with the weights
 // carried along the ray, land in a cell holding them and get the value that cell interpolates there: with
-// the tets' corners read, as on the GPU, and with their affine records, as on the host.
+// the tets' corners read, as on the GPU (whose policy reads them even where there are records), and with
+// their affine records, as on the host.
 TEST(WalkTets, CarriedWeightsGiveTheCellsOwnValues) {
   const Mesh mesh =
       buildMesh(makeBoxGrid(
                     CellType::Tetra, 5, kCube, [](Vec3f p) { return p.x * p.y + p.z; }, 0.3f, 11),
                 "box");
-  for (const auto [field, records] : {std::pair{0, false}, {-1, false}, {0, true}, {-1, true}}) {
-    SCOPED_TRACE(testing::Message() << "field " << field << (records ? ", affine records" : ", corners"));
+  for (const auto [field, records, device] : {std::tuple{0, false, false},
+                                              {-1, false, false},
+                                              {0, true, false},
+                                              {-1, true, false},
+                                              {0, true, true},
+                                              {-1, true, true}}) {
+    SCOPED_TRACE(testing::Message() << "field " << field << (records ? ", affine records" : ", corners")
+                                    << (device ? ", device sampling" : ", host sampling"));
     const bool cellData = field < 0;
     const std::vector<uint32_t> neighbors = buildTetNeighbors(mesh);
     // Cell data: the cells' own index as their value, so that a value names its cell.
     std::vector<float> cellValues(mesh.tets.size() / 4);
     for (size_t c = 0; c < cellValues.size(); ++c)
       cellValues[c] = float(c);
-    SceneView scene;
-    scene.mesh = makeMeshView(mesh, field);
+    VolumeView volume;
+    volume.mesh = makeMeshView(mesh, field);
     if (cellData) {
-      scene.mesh.values = cellValues.data();
-      scene.mesh.cellCentered = true;
+      volume.mesh.values = cellValues.data();
+      volume.mesh.cellCentered = true;
     }
-    scene.tetNeighbors = neighbors.data();
-    const std::vector<TetAffine> affine = records ? buildTetAffine(scene.mesh) : std::vector<TetAffine>{};
-    scene.tetAffine = records ? affine.data() : nullptr;
+    volume.tetNeighbors = neighbors.data();
+    const std::vector<TetAffine> affine = records ? buildTetAffine(volume.mesh) : std::vector<TetAffine>{};
+    volume.tetAffine = records ? affine.data() : nullptr;
     std::mt19937 random(2);
     int carried = 0, walked = 0;
     for (int r = 0; r < 200; ++r) {
       const auto [origin, ray, tExit] = randomRayInCube(random);
       RayCell at;
-      at.cell = cellHolding(scene.mesh, origin);
+      at.cell = cellHolding(volume.mesh, origin);
       ASSERT_NE(at.cell, kNoCell);
       for (float t = 0.f; t < tExit; t += 0.05f) {
         float value;
-        ASSERT_TRUE(walkTets(scene, ray, t, at.cell, true, 64, at, value)) << "ray " << r << " t " << t;
+        const bool found = device ? walkTets<DeviceSampling>(volume, ray, t, at.cell, true, 64, at, value)
+                                  : walkTets<HostSampling>(volume, ray, t, at.cell, true, 64, at, value);
+        ASSERT_TRUE(found) << "ray " << r << " t " << t;
         const Vec3f p = ray.at(t);
-        ASSERT_TRUE(cellContains(scene.mesh, at.cell, p));
+        ASSERT_TRUE(cellContains(volume.mesh, at.cell, p));
         float expected;
-        ASSERT_TRUE(sampleCell(scene.mesh, at.cell, p, expected));
+        ASSERT_TRUE(sampleCell(volume.mesh, at.cell, p, expected));
         EXPECT_NEAR(value, expected, 1e-5f);
         (at.t < t ? carried : walked) += 1;
       }
@@ -106,32 +116,34 @@ TEST(WalkTets, GuessesChangeOnlyWhereTheWalkStarts) {
   const std::vector<uint32_t> neighbors = buildTetNeighbors(mesh);
   for (const bool records : {false, true}) {
     SCOPED_TRACE(records ? "affine records" : "corners");
-    SceneView scene;
-    scene.mesh = makeMeshView(mesh, 0);
-    scene.tetNeighbors = neighbors.data();
-    const std::vector<TetAffine> affine = records ? buildTetAffine(scene.mesh) : std::vector<TetAffine>{};
-    scene.tetAffine = records ? affine.data() : nullptr;
+    VolumeView volume;
+    volume.mesh = makeMeshView(mesh, 0);
+    volume.tetNeighbors = neighbors.data();
+    const std::vector<TetAffine> affine = records ? buildTetAffine(volume.mesh) : std::vector<TetAffine>{};
+    volume.tetAffine = records ? affine.data() : nullptr;
     std::mt19937 random(5);
-    std::uniform_int_distribution<uint32_t> anyTet(0, scene.mesh.tetCount - 1);
+    std::uniform_int_distribution<uint32_t> anyTet(0, volume.mesh.tetCount - 1);
     int fromGuess = 0, samples = 0;
     for (int r = 0; r < 100; ++r) {
       const auto [origin, ray, tExit] = randomRayInCube(random);
       RayCell plain, guessed;
-      plain.cell = guessed.cell = cellHolding(scene.mesh, origin);
+      plain.cell = guessed.cell = cellHolding(volume.mesh, origin);
       ASSERT_NE(plain.cell, kNoCell);
       for (float t = 0.f; t < tExit; t += 0.13f, ++samples) {
         const Vec3f p = ray.at(t);
         // The tet of a point a little off the ray, as a neighbouring ray's; or any tet at all.
         const uint32_t guess =
-            samples % 2 ? cellHolding(scene.mesh, p + Vec3f{0.02f, -0.01f, 0.015f}) : anyTet(random);
+            samples % 2 ? cellHolding(volume.mesh, p + Vec3f{0.02f, -0.01f, 0.015f}) : anyTet(random);
         const uint32_t before = guessed.cell;
         float withoutGuess, withGuess;
-        ASSERT_TRUE(locateSample(scene, true, false, ray, t, 64, false, kNoCell, plain, withoutGuess));
-        ASSERT_TRUE(locateSample(scene, true, false, ray, t, 64, false, guess, guessed, withGuess))
+        ASSERT_TRUE(
+            locateSample<HostSampling>(volume, true, false, ray, t, 64, false, kNoCell, plain, withoutGuess));
+        ASSERT_TRUE(
+            locateSample<HostSampling>(volume, true, false, ray, t, 64, false, guess, guessed, withGuess))
             << "ray " << r << " t " << t;
-        ASSERT_TRUE(cellContains(scene.mesh, guessed.cell, p));
+        ASSERT_TRUE(cellContains(volume.mesh, guessed.cell, p));
         float expected;
-        ASSERT_TRUE(sampleCell(scene.mesh, guessed.cell, p, expected));
+        ASSERT_TRUE(sampleCell(volume.mesh, guessed.cell, p, expected));
         EXPECT_NEAR(withGuess, expected, 1e-5f);
         EXPECT_NEAR(withGuess, withoutGuess, 1e-5f);
         fromGuess += guessed.cell != before && guessed.cell == guess;
@@ -237,31 +249,31 @@ TEST(WalkCells, FindTheCellHoldingEachSample) {
                                     type, 5, kCube, [](Vec3f p) { return p.x * p.y + p.z; }, 0.3f, 11),
                                 "lattice");
     const std::vector<uint32_t> neighbors = buildCellNeighbors(mesh);
-    SceneView scene;
-    scene.mesh = makeMeshView(mesh, 0);
-    const std::vector<Vec4f> planes = buildCellFacePlanes(scene.mesh);
-    scene.cellNeighbors = neighbors.data();
-    scene.cellFacePlanes = planes.data();
+    VolumeView volume;
+    volume.mesh = makeMeshView(mesh, 0);
+    const std::vector<Vec4f> planes = buildCellFacePlanes(volume.mesh);
+    volume.cellNeighbors = neighbors.data();
+    volume.cellFacePlanes = planes.data();
     std::mt19937 random(3);
     int steps = 0, walks = 0, failed = 0;
     for (int r = 0; r < 100; ++r) {
       const auto [origin, ray, tExit] = randomRayInCube(random);
       RayCell at;
-      at.cell = cellHolding(scene.mesh, origin);
+      at.cell = cellHolding(volume.mesh, origin);
       ASSERT_NE(at.cell, kNoCell);
       for (float t = 0.f; t < tExit - 1e-3f; t += 0.1f) {
         const uint32_t from = at.cell;
         const Vec3f p = ray.at(t);
         float value;
         ++walks;
-        if (!walkCells(scene, ray, t, at.cell, 64, at, value)) {
+        if (!walkCells<HostSampling>(volume, ray, t, at.cell, 64, at, value)) {
           ++failed;
-          at.cell = cellHolding(scene.mesh, p);
+          at.cell = cellHolding(volume.mesh, p);
           continue;
         }
-        ASSERT_TRUE(cellContains(scene.mesh, at.cell, p));
+        ASSERT_TRUE(cellContains(volume.mesh, at.cell, p));
         float expected;
-        ASSERT_TRUE(sampleCell(scene.mesh, at.cell, p, expected));
+        ASSERT_TRUE(sampleCell(volume.mesh, at.cell, p, expected));
         EXPECT_NEAR(value, expected, 1e-5f);
         steps += at.cell != from;
       }

@@ -5,6 +5,7 @@
 #include "accel/acceleration.h"
 #include "mesh/mesh_view.h"
 #include "render/integrator.h"
+#include "render/scene_view.h"
 
 namespace uvr {
 

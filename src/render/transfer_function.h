@@ -132,15 +132,4 @@ UVR_HOST_DEVICE inline float normalizedSigma(float variance, float lowest, float
   return span > 0.f ? sqrtf(clampf((variance - lowest) / span, 0.f, 1.f)) : 1.f;
 }
 
-/// The paper's step size for a partition of normalised deviation `sigma` (§2.4).
-UVR_HOST_DEVICE inline float adaptiveStepSize(float s1, float s2, float p, float sigma) {
-  return maxf(s1 + (s2 - s1) * powf(fabsf(minf(sigma, 1.f) - 1.f), p), s1);
-}
-
-/// The sigma above which adaptiveStepSize rounds to one fixed step (the integrator's steps are whole numbers
-/// of s1): where (s2 - s1) (1 - sigma)^p < s1 / 2. -inf where s2 = s1.
-inline float finestStepSigma(float s1, float s2, float p) {
-  return s2 > s1 ? 1.f - powf(0.5f * s1 / (s2 - s1), 1.f / p) : -INFINITY;
-}
-
 } // namespace uvr

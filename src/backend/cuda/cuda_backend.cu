@@ -53,7 +53,7 @@ __global__ void __launch_bounds__(kRenderBlockThreads, BlocksPerSm)
     if (crossingStart)
       crossings =
           pixelCrossings(crossingStart, crossingKeys, uint64_t(y) * uint64_t(target.width) + uint64_t(x));
-    const RayResult result = integrateRay(scene, settings, camera.ray(x, y), hint, crossings);
+    const RayResult result = integrateRay<DeviceSampling>(scene, settings, camera.ray(x, y), hint, crossings);
     target.store(x, y, result);
     taken = result.samples;
   }

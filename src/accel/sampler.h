@@ -1,0 +1,349 @@
+// The sampler (Open VKL's split: volume, sampler, interval iterator): finds the cell holding a point on a ray
+// and interpolates the field there, reading only the volume (mesh and acceleration data). Samples along a
+// ray lie a cell or two apart, so each is walked to across faces from the last one's cell, with the seed grid
+// and the BVH for walks that fail or would be long.
+//
+// The host and the GPU share the code; what only the host can afford (per-tet records, walks through cells
+// other than tets, a trail of guesses from ray to ray) is chosen at compile time by a sampling policy, so
+// that the GPU's kernels hold no code for it.
+#pragma once
+
+#include "accel/bvh.h"
+#include "accel/volume_view.h"
+#include "core/host_device.h"
+#include "core/vec.h"
+#include "mesh/cell.h"
+#include "mesh/cell_neighbors.h"
+#include "mesh/tet_affine.h"
+
+#include <cstdint>
+
+namespace uvr {
+
+/// The GPU's sampling: tets from their corners, other cells tested one at a time, no trail.
+struct DeviceSampling {
+  static constexpr bool kTetRecords = false; ///< read the per-tet records where the volume has them
+  static constexpr bool kCellWalks = false;  ///< walk across cells other than tets
+  static constexpr bool kTrail = false;      ///< follow a CellTrail from ray to ray
+};
+
+/// The host's sampling: all of the above. The GPU keeps no records (64 bytes per tet) and builds no
+/// adjacency for other cells; its neighbouring rays run at once, so there is no previous ray to learn from.
+struct HostSampling {
+  static constexpr bool kTetRecords = true;
+  static constexpr bool kCellWalks = true;
+  static constexpr bool kTrail = true;
+};
+
+/// The cell a ray's last sample lies in. For a tet, also the sample's barycentric weights and field with
+/// their change per unit t along the ray: the next sample, a step on, is tested against the tet with a few
+/// multiply-adds and no loads, and where it lies beyond, its weights name the face to walk across.
+struct RayCell {
+  uint32_t cell = kNoCell;
+  bool onRay = false;  ///< whether the ray passes through `cell`: where not, `cell` is a guess near it
+  bool affine = false; ///< whether the members below describe `cell` (a tet) on this ray
+  float t = 0.f;       ///< where they were evaluated
+  float w[4], dw[4];
+  float value, dvalue;
+
+  /// Moves to `to`, a cell the ray passes through, with no weights known there yet.
+  UVR_HOST_DEVICE void enter(uint32_t to) {
+    cell = to;
+    onRay = true;
+    affine = false;
+  }
+  /// Where `affine`: the weights in `cell` of the point at `tNext` on the ray, and the face it lies furthest
+  /// beyond (see smallestWeight), with its weight in `lowest`.
+  UVR_HOST_DEVICE int weightsAt(float tNext, float weights[4], float &lowest) const {
+    const float s = tNext - t;
+    for (int i = 0; i < 4; ++i)
+      weights[i] = w[i] + s * dw[i];
+    return smallestWeight(weights, lowest);
+  }
+  /// Where `affine`: the field at `tNext` on the ray, as `cell` interpolates it.
+  UVR_HOST_DEVICE float valueAt(float tNext) const { return value + (tNext - t) * dvalue; }
+};
+
+/// Per index on the sample grid (see RaySampler::follow), a guess at the tet holding a CPU thread's next
+/// ray's sample: each ray reads its entries and then writes there, for the next ray, the tet its own sample
+/// lies in or, where the next ray's point of the same index lies beyond a face of it, the neighbour across
+/// (see likelyTet). Neighbouring rays pass a fraction of a cell apart, so a walk from such a guess mostly
+/// ends at its first tet, far more often than one from the tet the previous ray found, and whether it does
+/// is no longer a coin toss for the branch predictor. One buffer serves a thread's rays in turn (pixels in
+/// serpentine order), and an entry left by an older ray is only a worse guess.
+struct CellTrail {
+  uint32_t *cells = nullptr; ///< kNoCell where the ray found no tet
+  uint32_t size = 0;
+  const Ray *next = nullptr; ///< the ray that reads the entries this one writes, or null
+};
+
+/// The tet that most likely holds `p`, a point a fraction of a cell from one in `tet`: `tet`, or where `p`
+/// lies beyond a face, the tet across the face it lies furthest beyond. Computed without a branch, since
+/// which way it goes is a coin toss. Host only: it reads the records.
+inline uint32_t likelyTet(const VolumeView &volume, uint32_t tet, Vec3f p) {
+  float w[4], value;
+  volume.tetAffine[tet].at(p, w, value);
+  const float lowest = minf(minf(w[0], w[1]), minf(w[2], w[3]));
+  // The face by a mask, not smallestWeight, whose choice the compiler turns into a branch here: one that
+  // mispredicts half the time. Bit 3 stands for face 3, and where a weight is NaN (a flat tet), for any.
+  const unsigned lowestFaces =
+      unsigned(w[0] == lowest) | unsigned(w[1] == lowest) << 1 | unsigned(w[2] == lowest) << 2 | 8u;
+  const uint32_t across = volume.tetNeighbors[4 * uint64_t(tet) + uint64_t(__builtin_ctz(lowestFaces))];
+  const uint32_t moves = 0u - (uint32_t(lowest < -kInsideTolerance) & uint32_t(across != kNoCell));
+  return tet ^ ((tet ^ across) & moves);
+}
+
+/// The tet, of those `across` the faces of a tet, that a walk towards a point with weights `w` crosses: the
+/// face the point lies furthest beyond (`beyond`); where that is the mesh's boundary and the walk follows a
+/// ray (`alongRay`), the face the ray leaves by, whose weights change by `dw` along it. A walk from a tet on
+/// the ray thus goes on around a concavity, where the point, inside the mesh, lies beyond the boundary as
+/// seen from a tet on the way; a walk from a guess gives up at once.
+UVR_HOST_DEVICE inline uint32_t nextTet(Index4 across, int beyond, const float w[4], const float dw[4],
+                                        bool alongRay) {
+  const uint32_t next = across[beyond];
+  return next != kNoCell || !alongRay ? next : across[rayExitFace(w, dw, beyond)];
+}
+
+/// Tet `tet`'s record where the policy reads them and the volume has them, else null (the walk then reads
+/// the corners). The walk's next tet, or the next sample's, is one of the neighbours `across`: fetching
+/// their records while this one is evaluated hides most of the miss on the next.
+template <class Sampling>
+UVR_HOST_DEVICE UVR_HOST_INLINE const TetAffine *tetRecord(const VolumeView &volume, uint32_t tet,
+                                                           Index4 across) {
+  if constexpr (Sampling::kTetRecords) {
+    const TetAffine *affine = volume.tetAffine ? volume.tetAffine + tet : nullptr;
+    if (affine) {
+      for (int i = 0; i < 4; ++i)
+        if (across[i] < volume.mesh.tetCount)
+          __builtin_prefetch(volume.tetAffine + across[i]);
+    }
+    return affine;
+  } else {
+    return nullptr;
+  }
+}
+
+/// The barycentric weights `w` of `p` in a tet and their change `dw` per unit step along `direction`: from
+/// its record `affine`, which also gives the field there and its change (`value`, `slope`), or where that is
+/// null, from its corners `v`. False for a flat tet.
+template <class Sampling>
+UVR_HOST_DEVICE UVR_HOST_INLINE bool tetWeightsAlong(const MeshView &mesh, const TetAffine *affine, Index4 v,
+                                                     Vec3f p, Vec3f direction, float w[4], float dw[4],
+                                                     float &value, float &slope) {
+  if constexpr (Sampling::kTetRecords) { // records are host-only: the GPU's code must not name along()
+    if (affine)
+      return affine->along(p, direction, w, dw, value, slope);
+  }
+  return tetBarycentricsAlong(mesh.points[v.x], mesh.points[v.y], mesh.points[v.z], mesh.points[v.w], p,
+                              direction, w, dw);
+}
+
+/// Steps through tets towards the sample at `t` on `ray`, from `start` across the face the sample lies
+/// furthest beyond (see nextTet; `alongRay`: the ray passes through `start`), as long as that is a tet; on
+/// success `at` describes the tet holding the sample and `value` is the field there. Gives up after
+/// `maxSteps` tets.
+template <class Sampling>
+UVR_HOST_DEVICE UVR_HOST_INLINE bool walkTets(const VolumeView &volume, const Ray &ray, float t,
+                                              uint32_t start, bool alongRay, int maxSteps, RayCell &at,
+                                              float &value) {
+  const MeshView &mesh = volume.mesh;
+  uint32_t current = start;
+  int step = 0;
+  float w[4];
+  if (at.affine && at.cell == start) {
+    const Index4 across = Index4::load(volume.tetNeighbors + 4 * uint64_t(current));
+    float lowest;
+    const int exit = at.weightsAt(t, w, lowest);
+    if (lowest >= -kInsideTolerance) {
+      value = at.valueAt(t);
+      return true;
+    }
+    current = nextTet(across, exit, w, at.dw, alongRay);
+    step = 1;
+  }
+  const Vec3f p = ray.at(t);
+  for (; step < maxSteps && current < mesh.tetCount; ++step) {
+    // Read before the weights, not once the face to cross is known: the next tet is then at hand.
+    const Index4 across = Index4::load(volume.tetNeighbors + 4 * uint64_t(current));
+    const TetAffine *affine = tetRecord<Sampling>(volume, current, across);
+    // The corners only where no record holds the tet: read anyway, they were another line missed per step.
+    const Index4 v = affine ? Index4{} : Index4::load(mesh.tets + 4 * uint64_t(current));
+    float dw[4], slope = 0.f;
+    if (!tetWeightsAlong<Sampling>(mesh, affine, v, p, ray.direction, w, dw, value, slope))
+      return false;
+    float lowest;
+    const int exit = smallestWeight(w, lowest);
+    if (lowest >= -kInsideTolerance) {
+      if (!affine) { // else the record gave the value and its slope with the weights
+        if (mesh.cellCentered) {
+          value = mesh.values[current];
+        } else {
+          const float v0 = mesh.values[v.x], v1 = mesh.values[v.y], v2 = mesh.values[v.z],
+                      v3 = mesh.values[v.w];
+          value = w[0] * v0 + w[1] * v1 + w[2] * v2 + w[3] * v3;
+          slope = dw[0] * v0 + dw[1] * v1 + dw[2] * v2 + dw[3] * v3;
+        }
+      }
+      at.cell = current;
+      at.onRay = true;
+      at.affine = true;
+      at.t = t;
+      for (int i = 0; i < 4; ++i) {
+        at.w[i] = w[i];
+        at.dw[i] = dw[i];
+      }
+      at.value = value;
+      at.dvalue = slope;
+      return true;
+    }
+    current = nextTet(across, exit, w, dw, alongRay);
+  }
+  // Where a walk along the ray left the mesh, so did the ray: later walks from `at` stop at the boundary,
+  // rather than follow the ray out again for every sample in the empty space beyond.
+  if (alongRay && current == kNoCell)
+    at.onRay = false;
+  return false;
+}
+
+/// Steps through cells other than tets towards the sample at `t` on `ray`, from `start` across the face whose
+/// plane the sample lies furthest beyond, testing a cell (a Newton solve) only where the sample lies within
+/// about all its faces' planes; a tet on the way hands over to walkTets. Gives up after `maxSteps` cells.
+template <class Sampling>
+UVR_HOST_DEVICE inline bool walkCells(const VolumeView &volume, const Ray &ray, float t, uint32_t start,
+                                      int maxSteps, RayCell &at, float &value) {
+  const MeshView &mesh = volume.mesh;
+  const Vec3f p = ray.at(t);
+  uint32_t current = start;
+  for (int step = 0; step < maxSteps && current != kNoCell; ++step) {
+    if (current < mesh.tetCount)
+      return volume.tetNeighbors &&
+             walkTets<Sampling>(volume, ray, t, current, false, maxSteps - step, at, value);
+    const uint64_t other = uint64_t(current) - mesh.tetCount;
+    float beyond;
+    const int face = furthestFace(volume.cellFacePlanes, other, p, beyond);
+    // Faces of distorted cells are not planar: near their planes, the cell's own test decides.
+    if (beyond <= 0.25f && sampleCell(mesh, current, p, value)) {
+      at.enter(current);
+      return true;
+    }
+    current = volume.cellNeighbors[kMaxCellFaces * other + uint64_t(face)];
+  }
+  return false;
+}
+
+/// Finds the cell holding the sample at `t` on `ray` and returns the field there. Where `guess` (the
+/// tet the neighbouring ray expects this sample in, see CellTrail) is a tet other than `at`'s and the sample
+/// is not in `at`'s, a short walk from `guess` comes first. Else the walk starts from `at` (the previous
+/// sample's cell), or, where the sample lies `far` from it (a step longer than a seed voxel) or there is
+/// none, from the seed of the sample's voxel. `walkSteps` bounds a walk from `at`: about 8 per fixed step,
+/// since samples lie a cell or two apart. With `skipEmpty`, points in empty space are rejected without the
+/// BVH: with `clearVoxels` too by the occupancy grid at once, or where the walk fails, by the boundary faces'
+/// parity; and a point the parity leaves inside (the walk left the mesh through a concavity, or ran out of
+/// steps) is walked to again from a cell near it (SeedGridView::startNear), so that the BVH, a long divergent
+/// query on a GPU, is left for what neither walk finds. Without `skipEmpty` a failed walk goes to the BVH, as
+/// in a plain ray marcher.
+template <class Sampling>
+UVR_HOST_DEVICE UVR_HOST_INLINE bool locateSample(const VolumeView &volume, bool skipEmpty, bool clearVoxels,
+                                                  const Ray &ray, float t, int walkSteps, bool far,
+                                                  uint32_t guess, RayCell &at, float &value) {
+  const Vec3f p = ray.at(t);
+  if (skipEmpty && clearVoxels && !volume.occupancy.mayHoldCell(p))
+    return false;
+  // Four tets: most walks from a guess end at the first, and one that fails falls back on the ray's own. A
+  // test of the ray's own tet first would seldom find the sample where the guess does not.
+  if (guess != kNoCell && guess != at.cell && volume.tetNeighbors &&
+      walkTets<Sampling>(volume, ray, t, guess, false, 4, at, value))
+    return true;
+  // A walk from `start`; a cell other than a tet is tested alone where the policy has no walks for it.
+  auto locateFrom = [&](uint32_t start, int steps) {
+    if (volume.tetNeighbors && start < volume.mesh.tetCount)
+      return walkTets<Sampling>(volume, ray, t, start, start == at.cell && at.onRay, steps, at, value);
+    if constexpr (Sampling::kCellWalks) {
+      if (volume.cellNeighbors && volume.cellFacePlanes && start >= volume.mesh.tetCount)
+        return walkCells<Sampling>(volume, ray, t, start, steps, at, value);
+    }
+    if (!sampleCell(volume.mesh, start, p, value))
+      return false;
+    at.enter(start);
+    return true;
+  };
+  const uint32_t seed = far || at.cell == kNoCell ? volume.seeds.seedAt(p) : kNoCell;
+  const uint32_t start = seed != kNoCell ? seed : at.cell;
+  if (start != kNoCell && locateFrom(start, seed != kNoCell ? kSeedWalkSteps : walkSteps))
+    return true;
+  if (skipEmpty) {
+    if (volume.seeds.outsideMesh(volume.mesh, p))
+      return false;
+    const uint32_t nearby = volume.seeds.startNear(p);
+    if (nearby != kNoCell && nearby != start && locateFrom(nearby, kSeedWalkSteps))
+      return true;
+  }
+  return findCell(volume.bvh, p, [&](uint32_t candidate) {
+    if (candidate == start || !sampleCell(volume.mesh, candidate, p, value))
+      return false;
+    at.enter(candidate);
+    return true;
+  });
+}
+
+/// Samples one ray's field at growing t: what the sampler carries along a ray (the cell of its last sample,
+/// and on the host the trail) around locateSample.
+template <class Sampling> struct RaySampler {
+  const VolumeView &volume;
+  const Ray &ray;
+  bool skipEmpty;   ///< see locateSample
+  bool clearVoxels; ///< likewise
+  RayCell at;
+  CellTrail trail;
+  bool predict = false;   ///< whether the entries written are guesses at the next ray's tets (likelyTet)
+  float nextOrigin = 0.f; ///< where the next ray's sample grid starts
+  float spacing = 0.f;    ///< and its spacing, this ray's
+
+  /// A sampler for `ray` whose first walk starts at `near` (kNoCell: at a seed).
+  UVR_HOST_DEVICE RaySampler(const VolumeView &volume, const Ray &ray, uint32_t near, bool skipEmpty,
+                             bool clearVoxels)
+      : volume(volume), ray(ray), skipEmpty(skipEmpty), clearVoxels(clearVoxels) {
+    at.cell = near;
+  }
+
+  /// Follows `trail`, indexed by point on the sample grid: t = tEnter + k * gridSpacing, from where a ray
+  /// enters `gridBounds`. Only where the policy has a trail.
+  UVR_HOST_DEVICE void follow(const CellTrail &cells, const Box3f &gridBounds, float gridSpacing) {
+    if constexpr (Sampling::kTrail) {
+      trail = cells;
+      spacing = gridSpacing;
+      float nextExit;
+      predict = trail.next && volume.tetAffine &&
+                intersectBox(*trail.next, gridBounds, 0.f, INFINITY, nextOrigin, nextExit);
+    }
+  }
+
+  /// Moves to `tet`, one the ray enters the mesh by.
+  UVR_HOST_DEVICE void enter(uint32_t tet) { at.enter(tet); }
+  /// The cell of the last sample located, or the one near it the sampler started from.
+  UVR_HOST_DEVICE uint32_t cell() const { return at.cell; }
+
+  /// The field at `t`, grid point `k`, into `value`; false where no cell holds the sample. `walkSteps` and
+  /// `far` as locateSample takes them.
+  UVR_HOST_DEVICE UVR_HOST_INLINE bool sample(float t, float k, int walkSteps, bool far, float &value) {
+    if constexpr (!Sampling::kTrail) {
+      return locateSample<Sampling>(volume, skipEmpty, clearVoxels, ray, t, walkSteps, far, kNoCell, at,
+                                    value);
+    } else {
+      // Compared as floats: k may lie past what a uint32_t holds where the trail ends.
+      const bool trailed = k < float(trail.size);
+      const uint32_t index = trailed ? uint32_t(k) : 0;
+      const bool located = locateSample<Sampling>(volume, skipEmpty, clearVoxels, ray, t, walkSteps, far,
+                                                  trailed ? trail.cells[index] : kNoCell, at, value);
+      if (trailed) {
+        uint32_t cell = located && at.cell < volume.mesh.tetCount ? at.cell : kNoCell;
+        if (predict && cell != kNoCell)
+          cell = likelyTet(volume, cell, trail.next->at(nextOrigin + k * spacing));
+        trail.cells[index] = cell;
+      }
+      return located;
+    }
+  }
+};
+
+} // namespace uvr

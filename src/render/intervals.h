@@ -1,0 +1,172 @@
+// The interval iterator (Open VKL's split: volume, sampler, interval iterator): a ray's intervals front to
+// back, each with the step to sample it by. This is where the paper's space skipping (§2.2-2.3) and adaptive
+// sampling (§2.4) live: skipping drops the partitions the transfer function makes transparent and the parts
+// of the ray outside the mesh (before its first boundary crossing, after its last, and the gaps between a
+// crossing out and the next one back in); adaptive sampling gives each partition a step from its colour
+// deviation. Samples lie on one grid per ray (SampleGrid), so every sample is one that `reference` takes.
+#pragma once
+
+#include "accel/partitions.h"
+#include "core/host_device.h"
+#include "core/vec.h"
+#include "mesh/cell.h"
+#include "render/boundary_crossings.h"
+#include "render/scene_view.h"
+#include "render/transfer_function.h"
+
+#include <uvr/settings.h>
+
+#include <cmath>
+#include <cstdint>
+
+namespace uvr {
+
+/// Whether `mode` skips transparent partitions and empty space.
+UVR_HOST_DEVICE constexpr bool skipsSpace(RenderMode mode) {
+  return mode == RenderMode::Skip || mode == RenderMode::Full;
+}
+
+/// Whether `mode` steps through each partition by its colour variance.
+UVR_HOST_DEVICE constexpr bool samplesAdaptively(RenderMode mode) {
+  return mode == RenderMode::Adaptive || mode == RenderMode::Full;
+}
+
+struct IntegratorSettings {
+  RenderMode mode = RenderMode::Full;
+  float s1 = 1.f, s2 = 1.f, p = 2.f;
+  float unit = 1.f;                 ///< opacity unit distance
+  float terminationOpacity = 0.99f; ///< early ray termination
+  /// Derived from s1, s2 and p by Renderer::render (finestStepSigma): partitions of greater sigma take step
+  /// s1 outright, and subtrees of such partitions are marched whole. The default, +inf, computes every
+  /// partition's step and, when sampling adaptively, marches every partition alone.
+  float finestStepSigma = INFINITY;
+};
+
+/// The paper's step size for a partition of normalised deviation `sigma` (§2.4).
+UVR_HOST_DEVICE inline float adaptiveStepSize(float s1, float s2, float p, float sigma) {
+  return maxf(s1 + (s2 - s1) * powf(fabsf(minf(sigma, 1.f) - 1.f), p), s1);
+}
+
+/// The sigma above which adaptiveStepSize rounds to one fixed step (the march's steps are whole numbers of
+/// s1): where (s2 - s1) (1 - sigma)^p < s1 / 2. -inf where s2 = s1.
+inline float finestStepSigma(float s1, float s2, float p) {
+  return s2 > s1 ? 1.f - powf(0.5f * s1 / (s2 - s1), 1.f / p) : -INFINITY;
+}
+
+/// The points a ray's samples lie on, t = origin + k * spacing, from where the ray enters the mesh bounds,
+/// whatever the intervals: an interval's step is a whole number of spacings and its samples start at its
+/// first grid point, so skipping alone changes no sample that contributes, and a step of one spacing
+/// reproduces the fixed-step samples exactly. k is a float: the grid is indexed past what an int holds.
+struct SampleGrid {
+  float origin = 0.f;
+  float spacing = 1.f;
+
+  UVR_HOST_DEVICE float at(float k) const { return origin + k * spacing; }
+  /// The index of the first grid point at or after t.
+  UVR_HOST_DEVICE float indexAt(float t) const {
+    float k = ceilf((t - origin) / spacing);
+    while (at(k) < t) // the division can round down
+      k += 1.f;
+    return k;
+  }
+};
+
+/// One ray's intervals. forEach yields them with their steps, front to back; the march asks pastGap at each
+/// grid point it samples, since the gaps between boundary crossings cut across the partitions.
+class RayIntervals {
+public:
+  /// The intervals of `ray`: the partitions it crosses, each at its step, and with skipping only those drawn
+  /// and only between the ray's first and last `crossings` with the mesh's boundary, where these are known.
+  /// (`reference` marches the mesh bounds instead, from the grid's origin to boundsExit.)
+  UVR_HOST_DEVICE RayIntervals(const SceneView &scene, const IntegratorSettings &settings, const Ray &ray,
+                               const BoundaryCrossings &crossings)
+      : scene_(scene), settings_(settings), ray_(ray), crossings_(crossings) {
+    // No early return: the fields then take one value on every path, which leaves the GPU's kernel fewer
+    // values to keep (it spilled more with returns here).
+    float tEnter;
+    const bool hit = intersectBox(ray, scene.partitions.rootBounds, 0.f, INFINITY, tEnter, tExit_);
+    grid_ = {tEnter, settings.s1};
+    skip_ = skipsSpace(settings.mode);
+    adaptive_ = samplesAdaptively(settings.mode);
+    // A hundredth of a step of slack at crossings: rounding never leaves out a sample that `reference` finds
+    // in a cell.
+    margin_ = 0.01f * settings.s1;
+    tStart_ = tEnter;
+    tStop_ = tExit_;
+    gaps_ = false;
+    none_ = !hit;
+    if (skip_) {
+      none_ = none_ || crossings.none();
+      tStart_ = maxf(tEnter, crossings.first - margin_);
+      tStop_ = minf(tExit_, crossings.last + margin_);
+      gaps_ = crossings.count > 1;
+    }
+  }
+
+  /// Whether the ray meets no cell: it misses the mesh bounds or, skipping, every boundary face.
+  UVR_HOST_DEVICE bool none() const { return none_; }
+  UVR_HOST_DEVICE const SampleGrid &grid() const { return grid_; }
+  /// Where the ray leaves the mesh bounds (it enters them at the grid's origin).
+  UVR_HOST_DEVICE float boundsExit() const { return tExit_; }
+  /// The tet the ray enters the mesh by, where the skipping modes know it; else kNoCell.
+  UVR_HOST_DEVICE uint32_t entryTet() const {
+    return skip_ && crossings_.face != kNoCell ? crossings_.face >> 2 : kNoCell;
+  }
+  /// Whether every crossing is listed: samples then lie between them, in cells but for the margins.
+  UVR_HOST_DEVICE bool crossingsListed() const { return crossings_.keys != nullptr; }
+
+  /// Calls `visit(t0, t1, step)` for each partition's interval [t0, t1) front to back, until it returns
+  /// false: the modes other than `reference`, which marches the mesh bounds as one interval at step s1.
+  template <class Visit> UVR_HOST_DEVICE void forEach(Visit &&visit) const {
+    // Skipping, the traversal culls transparent partitions and clips each interval to its shrunk box.
+    traversePartitions(
+        scene_.partitions, ray_, tStart_, tStop_, skip_ ? scene_.nodeMaxOpacity : nullptr,
+        [&](uint32_t node) { return marchedWhole(node); },
+        [&](uint32_t node, float t0, float t1) { return visit(t0, t1, step(node)); });
+  }
+
+  /// The step through KD node `node`, a leaf or a subtree marched whole: the partition's adaptive step (paper
+  /// §2.4), or s1 where that rounds to it or nothing is sampled adaptively.
+  UVR_HOST_DEVICE float step(uint32_t node) const {
+    // A whole node's partitions all take step s1.
+    const KdNode &n = scene_.partitions.nodes[node];
+    const bool fixed = n.axis != KdNode::kLeaf || takesFinestStep(scene_.sigma[n.child]);
+    return fixed ? settings_.s1
+                 : adaptiveStepSize(settings_.s1, settings_.s2, settings_.p, scene_.sigma[n.child]);
+  }
+
+  /// Whether the ray leaves the mesh and enters it again: grid points may then lie in a gap (pastGap).
+  UVR_HOST_DEVICE bool hasGaps() const { return gaps_; }
+  /// Where the march goes on from grid point t: past the gap in the mesh that holds t, if one does, else t;
+  /// `entered` the face the ray comes back in by (see afterGap). t only grows along a ray.
+  UVR_HOST_DEVICE float pastGap(float t, uint32_t &entered) {
+    return afterGap(crossings_, t, margin_, cursor_, entered);
+  }
+
+private:
+  /// Whether partitions of deviation `sigma` take step s1.
+  UVR_HOST_DEVICE bool takesFinestStep(float sigma) const {
+    return !adaptive_ || sigma > settings_.finestStepSigma;
+  }
+  /// Whether the subtree under `node` is one interval: its partitions all drawn and all taking step s1, so
+  /// that marching it leaf by leaf would take the same samples at a higher cost (on a GPU, a large part of a
+  /// `full` frame).
+  UVR_HOST_DEVICE bool marchedWhole(uint32_t node) const {
+    const float sigma = scene_.nodeMinSigma[node];
+    return sigma != kTransparentSigma && takesFinestStep(sigma);
+  }
+
+  const SceneView &scene_;
+  const IntegratorSettings &settings_;
+  const Ray &ray_;
+  const BoundaryCrossings &crossings_;
+  bool none_;
+  SampleGrid grid_;
+  float tExit_;
+  float tStart_, tStop_; ///< the span the skipping modes march, crossings and margins included
+  float margin_;
+  bool skip_, adaptive_, gaps_;
+  CrossingCursor cursor_; ///< the march's place among the crossings
+};
+
+} // namespace uvr
