@@ -1,5 +1,5 @@
-#include "api/access.h"
 #include "engine/renderer.h"
+#include "api/access.h"
 #include "core/error.h"
 
 #include <uvr/renderer.h>

@@ -3,9 +3,9 @@
 #pragma once
 
 #include "accel/partitions.h"
+#include "core/color_map.h"
 #include "core/host_device.h"
 #include "core/vec.h"
-#include "core/color_map.h"
 
 #include <vector>
 

@@ -81,7 +81,8 @@ SampleTotals CpuBackend::render(const CameraView &camera, const IntegratorSettin
                           : BoundaryCrossings{};
             // A ray that crosses no boundary face is done at once.
             const RayResult result =
-                along.none() ? RayResult{} : integrateRay<HostSampling>(scene, settings, ray, hint, along, trail);
+                along.none() ? RayResult{}
+                             : integrateRay<HostSampling>(scene, settings, ray, hint, along, trail);
             ray = next;
             target.store(x, y, result);
             tileSamples.total += result.samples;
