@@ -44,6 +44,12 @@ void runConvert(const ConvertOptions &o) {
   const VolumeMesh mesh = chooseFields(VolumeMesh::load(o.input, options), o.fields, o.input);
   if (o.zlib && !o.output.ends_with(".vtu") && !o.output.ends_with(".VTU"))
     throw Error(o.output, "", "--zlib applies to .vtu output only");
+  if (o.output.ends_with(".umesh"))
+    for (int i = 0; i < mesh.fieldCount(); ++i)
+      if (mesh.field(i).centering == Centering::Cell)
+        throw Error(o.output, "",
+                    "umesh stores per-vertex scalars only, and '" + mesh.field(i).name +
+                        "' is a cell field: choose point fields with --field, or write .vtu");
   SaveOptions save;
   save.compress = o.zlib;
   mesh.save(o.output, save);

@@ -40,6 +40,12 @@ VoxelVolume readVolume(const GenCommandOptions &o) {
   const auto type = types.find(o.type);
   if (type == types.end())
     throw Error(o.volume, "", "a raw volume needs --type uint8, int16, uint16 or float32");
+  for (int a = 0; a < 3; ++a) {
+    if (o.dims[size_t(a)] < 1)
+      throw Error(o.volume, "", "expected positive --dims");
+    if (!(o.spacing[size_t(a)] > 0))
+      throw Error(o.volume, "", "expected positive --spacing");
+  }
   return VoxelVolume::readRaw(o.volume, {o.dims[0], o.dims[1], o.dims[2]}, type->second,
                               {o.spacing[0], o.spacing[1], o.spacing[2]});
 }

@@ -208,9 +208,9 @@ Volume readRawVolume(const std::string &path, std::array<int64_t, 3> dims, Voxel
   volume.dims = dims;
   for (int a = 0; a < 3; ++a) {
     if (dims[a] < 1)
-      throw Error(path, "", "expected positive --dims");
+      throw Error(path, "", "expected a positive voxel count on every axis");
     if (!(spacing[a] > 0))
-      throw Error(path, "", "expected positive --spacing");
+      throw Error(path, "", "expected a positive voxel spacing on every axis");
     volume.toWorld[a][a] = spacing[a];
   }
   if (volume.voxelCount() > kMaxVoxels)

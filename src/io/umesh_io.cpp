@@ -261,7 +261,7 @@ void writeUmesh(const std::string &path, const Mesh &mesh) {
     if (field.centering != Centering::Point)
       throw Error(path, "",
                   "umesh stores per-vertex scalars only, and '" + field.name +
-                      "' is a cell field: choose point fields with --field, or write .vtu");
+                      "' is a cell field: keep point fields only, or write .vtu");
   if (mesh.points.size() > uint64_t(INT32_MAX))
     throw Error(path, "", "umesh indexes vertices with 32-bit signed integers: too many points");
 
