@@ -2,8 +2,8 @@
 // in-memory file (memfd) and read back through /proc/self/fd: no disk traffic, nothing left behind.
 #pragma once
 
-#include "core/error.h"
 #include "mesh/mesh.h"
+#include <uvr/error.h>
 
 #include <sys/mman.h>
 #include <unistd.h>

@@ -1,8 +1,8 @@
 // The CUDA backend against the CPU one, frame by frame, on every cell type and mode. Runs where a GPU is.
-#include "core/error.h"
 #include "engine/renderer.h"
 #include "mesh/procedural_mesh.h"
 #include "mesh/tet_neighbors.h"
+#include <uvr/error.h>
 
 #include <gtest/gtest.h>
 

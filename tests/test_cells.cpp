@@ -1,9 +1,9 @@
 // Point location and interpolation inside single cells, and mesh construction.
-#include "core/error.h"
 #include "mesh/cell.h"
 #include "mesh/mesh_stats.h"
 #include "mesh/procedural_mesh.h"
 #include "mesh/tet_affine.h"
+#include <uvr/error.h>
 
 #include <gtest/gtest.h>
 

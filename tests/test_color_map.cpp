@@ -2,7 +2,7 @@
 // reference values marked "VTK" were computed with VTK 9.1's vtkColorTransferFunction / vtkPiecewiseFunction.
 #include "core/color_map.h"
 
-#include "core/error.h"
+#include <uvr/error.h>
 
 #include <gtest/gtest.h>
 

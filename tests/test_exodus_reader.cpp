@@ -1,7 +1,7 @@
 // The Exodus II reader: small files made with ncgen from tests/data/exodus/*.cdl (netCDF-3 classic and
 // netCDF-4), and the real disk_out_ref.ex2 against VTK's conversion of it to .vtu.
-#include "core/error.h"
 #include "io/mesh_io.h"
+#include <uvr/error.h>
 
 #include <gtest/gtest.h>
 

@@ -1,9 +1,9 @@
 // `uvr gen`: NIfTI and raw volumes, and the meshes made from them (conformity, grading, counts, determinism,
 // orientation, sampling).
-#include "core/error.h"
 #include "gen/mesher.h"
 #include "io/volume_io.h"
 #include "mesh/mesh_stats.h"
+#include <uvr/error.h>
 
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>

@@ -1,6 +1,6 @@
 // PNG input and output, SSIM and PSNR against scikit-image, and the sample heat map.
-#include "core/error.h"
-#include "image/image.h"
+#include <uvr/error.h>
+#include <uvr/image.h>
 
 #include <gtest/gtest.h>
 #include <png.h>

@@ -1,10 +1,10 @@
 // Whole-frame properties of the integrator: analytic transmittance, equivalence of the modes, no cracks at
 // partition boundaries, independence of cell winding.
-#include "core/error.h"
 #include "engine/renderer.h"
 #include "mesh/procedural_mesh.h"
 #include "mesh/tet_neighbors.h"
 #include "render/boundary_crossings.h"
+#include <uvr/error.h>
 
 #include <gtest/gtest.h>
 

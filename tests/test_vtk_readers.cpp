@@ -1,7 +1,7 @@
 // The VTK readers: VTK-written variants of real files in every supported encoding (tests/data/vtk, made by
 // make_vtk_variants.py) against VTK's own reading, the shared data sets, and malformed input.
-#include "core/error.h"
 #include "io/mesh_io.h"
+#include <uvr/error.h>
 
 #include <gtest/gtest.h>
 

@@ -127,6 +127,11 @@ def main():
                 run([uvr, "convert", source, stem + ".umesh"])
                 outputs.append(stem + "_via_umesh.vtu")
                 run([uvr, "convert", stem + ".umesh", outputs[-1]])
+            else:  # refused, with the option that chooses point fields named
+                refused = subprocess.run([uvr, "convert", source, stem + ".umesh"], capture_output=True, text=True)
+                if refused.returncode != 2 or "is a cell field" not in refused.stderr or "--field" not in refused.stderr:
+                    failures.append(f"{relative} -> .umesh: expected a refusal naming --field, got "
+                                    f"{refused.returncode}: {refused.stderr.strip()}")
             for output in outputs:
                 compare(f"{relative} -> {os.path.basename(output)}", expected, describe(read_vtk(output)),
                         failures)

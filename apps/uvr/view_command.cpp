@@ -57,7 +57,7 @@ void addViewCommand(CLI::App &app) {
   CLI::App *cmd = app.add_subcommand("view", "Explore a mesh in a window");
   addRenderOptions(cmd, o.view);
   cmd->add_option("--script", o.script,
-                  "Replay camera moves and transfer-function edits from a file (README)");
+                  "Replay camera moves and transfer-function edits from a file (docs/cli.md)");
   cmd->add_option("--screenshot", o.screenshot, "Prefix of the PNGs the script's screenshot commands write");
   cmd->callback([options] { runView(*options); });
 }

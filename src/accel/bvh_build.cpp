@@ -1,9 +1,9 @@
 #include "accel/bvh.h"
 
-#include "core/error.h"
 #include "core/parallel_bounds.h"
 #include "core/progress.h"
 #include "mesh/cell.h"
+#include <uvr/error.h>
 
 #include <embree3/rtcore.h>
 #include <tbb/parallel_for.h>

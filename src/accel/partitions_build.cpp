@@ -1,9 +1,9 @@
 #include "accel/partitions.h"
 
-#include "core/error.h"
 #include "core/parallel_bounds.h"
 #include "core/progress.h"
 #include "mesh/cell.h"
+#include <uvr/error.h>
 
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>

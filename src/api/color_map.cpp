@@ -1,4 +1,4 @@
-#include "core/error.h"
+#include <uvr/error.h>
 
 #include <uvr/color_map.h>
 

@@ -1,8 +1,8 @@
 #include "api/access.h"
-#include "core/error.h"
 #include "gen/mesher.h"
 #include "gen/volume.h"
 #include "io/volume_io.h"
+#include <uvr/error.h>
 
 #include <uvr/gen.h>
 

@@ -1,8 +1,8 @@
 #include "accel/partitions.h"
 #include "api/access.h"
-#include "core/error.h"
 #include "io/mesh_io.h"
 #include "mesh/mesh_stats.h"
+#include <uvr/error.h>
 
 #include <algorithm>
 #include <cmath>

@@ -1,6 +1,6 @@
 #include "engine/renderer.h"
 #include "api/access.h"
-#include "core/error.h"
+#include <uvr/error.h>
 
 #include <uvr/renderer.h>
 #include <uvr/system.h>

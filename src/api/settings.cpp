@@ -1,4 +1,4 @@
-#include "core/error.h"
+#include <uvr/error.h>
 
 #include <uvr/settings.h>
 #include <uvr/system.h>
@@ -11,7 +11,7 @@ namespace uvr {
 
 namespace {
 
-/// Defaults measured on the brain meshes (README, "Choosing defaults"): s2 = kDefaultS2Factor * s1.
+/// Defaults chosen by measurement (docs/design.md, "Choosing defaults"): s2 = kDefaultS2Factor * s1.
 constexpr float kDefaultS2Factor = 8.f;
 constexpr float kDefaultP = 4.f;
 

@@ -2,7 +2,7 @@
 // as vtkPiecewiseFunction does it, so a preset looks here as it does in ParaView.
 #include "core/color_map.h"
 
-#include "core/error.h"
+#include <uvr/error.h>
 
 #include <algorithm>
 #include <array>

@@ -1,9 +1,9 @@
 #include "engine/renderer.h"
 
 #include "backend/cpu/cpu_backend.h"
-#include "core/error.h"
-#include "core/timer.h"
 #include "render/pixel.h"
+#include <uvr/error.h>
+#include <uvr/system.h>
 
 namespace uvr {
 

@@ -3,11 +3,11 @@
 #pragma once
 
 #include "backend/backend.h"
-#include "image/image.h"
 #include "mesh/mesh.h"
 #include "render/camera.h"
 #include "render/integrator.h"
 #include "render/transfer_function.h"
+#include <uvr/image.h>
 
 #include <memory>
 #include <optional>

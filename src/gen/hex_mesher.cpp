@@ -10,8 +10,8 @@
 // neighbouring spacing (a hash of position and seed), which keeps every cell positively oriented.
 #include "gen/mesher.h"
 
-#include "core/error.h"
 #include "core/progress.h"
+#include <uvr/error.h>
 
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>

@@ -24,9 +24,9 @@
 //    that no tet can invert (the smallest height of a coned tet is 0.18 of its leaf's side).
 #include "gen/mesher.h"
 
-#include "core/error.h"
 #include "core/morton.h"
 #include "core/progress.h"
+#include <uvr/error.h>
 
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>

@@ -1,7 +1,7 @@
 // Image comparison: SSIM exactly as scikit-image computes it (so numbers can be compared with the paper's
 // and with Python tooling), and PSNR.
-#include "core/error.h"
-#include "image/image.h"
+#include <uvr/error.h>
+#include <uvr/image.h>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>

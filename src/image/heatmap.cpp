@@ -1,7 +1,7 @@
 // Sample-count heat maps, as in the paper's figures: counts colour-coded with inferno, and a colour bar
 // with its scale drawn into the image in a tiny built-in bitmap font.
-#include "core/error.h"
-#include "image/image.h"
+#include <uvr/error.h>
+#include <uvr/image.h>
 
 #include <algorithm>
 #include <array>

@@ -1,8 +1,8 @@
 // PNG reading and writing with libpng. libpng reports errors by longjmp; each setjmp below sits in a
 // function whose locals are trivially destructible, so the jump skips no destructor, and the message is
 // turned into a uvr::Error once we are back in C++.
-#include "core/error.h"
-#include "image/image.h"
+#include <uvr/error.h>
+#include <uvr/image.h>
 
 #include <png.h>
 

@@ -1,8 +1,8 @@
 // ParaView's colour-map preset files, read and written (declared in <uvr/color_map.h>).
 #include "core/color_map.h"
 
-#include "core/error.h"
 #include "io/text_scan.h"
+#include <uvr/error.h>
 
 #include <nlohmann/json.hpp>
 

@@ -3,8 +3,8 @@
 // Every element block of a volume type becomes cells (higher-order ones by their corners, which Exodus lists
 // first, as VTK does); other blocks are skipped. Nodal variables become point fields and element variables,
 // stored per block, become one cell field over all kept blocks (NaN in blocks that lack the variable).
-#include "core/error.h"
 #include "io/mesh_io.h"
+#include <uvr/error.h>
 
 #include <string>
 

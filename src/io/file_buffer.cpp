@@ -1,6 +1,6 @@
 #include "io/file_buffer.h"
 
-#include "core/error.h"
+#include <uvr/error.h>
 
 #include <tbb/parallel_for.h>
 

@@ -5,12 +5,12 @@
 // prisms are mirrored (1 <-> 2, 4 <-> 5); tets, hexahedra and pyramids number their corners as VTK does.
 // Lower-dimensional elements become VTK cells of their dimension without points: buildMesh counts and drops
 // them. $NodeData and $ElementData become point and cell fields, at the time step asked for.
-#include "core/error.h"
 #include "core/progress.h"
 #include "io/binary.h"
 #include "io/file_buffer.h"
 #include "io/mesh_io.h"
 #include "io/text_scan.h"
+#include <uvr/error.h>
 
 #include <algorithm>
 #include <cmath>

@@ -1,6 +1,6 @@
-#include "core/error.h"
 #include "io/mesh_io.h"
 #include "io/text_scan.h"
+#include <uvr/error.h>
 
 #include <pugixml.hpp>
 

@@ -1,8 +1,8 @@
 // NIfTI-1 and raw volume readers. Files are read through zlib, which passes plain files through, so a
 // gzip-compressed .nii.gz reads as a .nii does.
-#include "core/error.h"
 #include "io/scalar_type.h"
 #include "io/volume_io.h"
+#include <uvr/error.h>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>

@@ -1,6 +1,6 @@
 #include "io/output_file.h"
 
-#include "core/error.h"
+#include <uvr/error.h>
 
 #include <cerrno>
 #include <cstring>

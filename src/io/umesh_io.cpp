@@ -11,11 +11,11 @@
 //   vector<uint64> vertex tags (optional)
 //
 // Cells use VTK's corner order, which is uvr's Mesh layout, so each array is read straight into place.
-#include "core/error.h"
 #include "core/progress.h"
 #include "io/file_buffer.h"
 #include "io/mesh_io.h"
 #include "io/output_file.h"
+#include <uvr/error.h>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>

@@ -2,10 +2,10 @@
 //
 // Keyword lines are read whole (in BINARY files the data starts right after the line's newline); values are
 // read as whitespace-separated text or as packed big-endian binary.
-#include "core/error.h"
 #include "io/file_buffer.h"
 #include "io/mesh_io.h"
 #include "io/scalar_type.h"
+#include <uvr/error.h>
 
 #include <algorithm>
 #include <charconv>

@@ -3,10 +3,10 @@
 // Only the XML head is given to pugixml: appended raw data can hold any byte, so the text up to the '_'
 // marker of <AppendedData> is parsed alone and each appended array is read at its `offset` after the marker.
 #include "core/buffer.h"
-#include "core/error.h"
 #include "io/file_buffer.h"
 #include "io/mesh_io.h"
 #include "io/scalar_type.h"
+#include <uvr/error.h>
 
 #ifdef UVR_HAVE_LIBDEFLATE
 #include <libdeflate.h>

@@ -3,10 +3,10 @@
 // Arrays are produced block by block from the Mesh (connectivity widened to Int64, offsets and type codes
 // computed), so no whole-array copy is made; with zlib the blocks are compressed in parallel, as VTK's
 // vtkZLibDataCompressor lays them out: [block count, block size, last block size, compressed sizes...].
-#include "core/error.h"
 #include "core/progress.h"
 #include "io/mesh_io.h"
 #include "io/output_file.h"
+#include <uvr/error.h>
 
 #include <tbb/parallel_for.h>
 #include <zlib.h>

@@ -1,8 +1,8 @@
 #include "mesh/mesh.h"
 
-#include "core/error.h"
 #include "core/parallel_bounds.h"
 #include "mesh/spatial_order.h"
+#include <uvr/error.h>
 
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>

@@ -1,6 +1,6 @@
 #include "render/transfer_function.h"
 
-#include "core/error.h"
+#include <uvr/error.h>
 
 #include <tbb/parallel_for.h>
 

@@ -1,9 +1,9 @@
 #include "backend/cpu/cpu_backend.h"
 
-#include "core/error.h"
-#include "core/timer.h"
 #include "render/boundary_crossings.h"
 #include "render/scene.h"
+#include <uvr/error.h>
+#include <uvr/system.h>
 
 #include <tbb/blocked_range2d.h>
 #include <tbb/parallel_for.h>

@@ -4,9 +4,9 @@
 #include "backend/cuda/cuda_build.cuh"
 #include "backend/cuda/device_buffer.cuh"
 #include "backend/cuda/partition_metadata.cuh"
-#include "core/error.h"
-#include "core/timer.h"
 #include "render/scene.h"
+#include <uvr/error.h>
+#include <uvr/system.h>
 
 #include <cuda_runtime.h>
 

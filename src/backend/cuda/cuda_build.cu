@@ -3,8 +3,8 @@
 // share.
 #include "backend/cuda/device_builder.cuh"
 
-#include "core/timer.h"
 #include "mesh/cell.h"
+#include <uvr/system.h>
 
 #include <cub/device/device_radix_sort.cuh>
 

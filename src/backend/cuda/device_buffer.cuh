@@ -1,7 +1,7 @@
 // Checked CUDA calls and owned device allocations, for the CUDA backend's sources.
 #pragma once
 
-#include "core/error.h"
+#include <uvr/error.h>
 
 #include <cuda_runtime.h>
 
