@@ -31,8 +31,23 @@ screenshot heatmap
 """
 
 
-def run(command):
+# In sanitizer builds LeakSanitizer exits with this status (LSAN_OPTIONS in tests/CMakeLists.txt), so that its
+# report can be read: leaks that the X11 and OpenGL stack or the sanitizer runtimes leave are not uvr's, and
+# their stacks do not always name a module that a suppression could match (a library unloaded at exit).
+LEAK_EXIT = 23
+
+
+def leaks_in_uvr(report, uvr, source):
+    """Whether a LeakSanitizer report holds a stack with a frame in uvr's binary or sources."""
+    return any(uvr in line or source in line or " uvr::" in line
+               for line in report.splitlines() if line.lstrip().startswith("#"))
+
+
+def run(command, uvr=None, source=None):
     result = subprocess.run(command, capture_output=True, text=True)
+    if result.returncode == LEAK_EXIT and uvr and "LeakSanitizer" in result.stderr and \
+            not leaks_in_uvr(result.stderr, uvr, source):
+        return result.stdout
     if result.returncode != 0:
         sys.exit(f"FAIL: {' '.join(command)} exited with {result.returncode}:\n{result.stderr.strip()}")
     return result.stdout
@@ -48,7 +63,8 @@ def main():
             f.write(SCRIPT)
         prefix = os.path.join(tmp, "shot")
         run(["xvfb-run", "-a", "-s", "-screen 0 1024x768x24", uvr, "view", mesh, "--field", "Temp", "--size",
-             f"{SIZE[0]}x{SIZE[1]}", "--script", script, "--screenshot", prefix])
+             f"{SIZE[0]}x{SIZE[1]}", "--script", script, "--screenshot", prefix], os.path.realpath(uvr),
+            os.path.realpath(source))
 
         # The starting camera, from `uvr render`'s defaults: the viewer must have moved away from it.
         info = json.loads(run([uvr, "info", mesh, "--json"]))
