@@ -12,7 +12,8 @@ namespace uvr {
 /// `value` with its bytes in reverse order (any arithmetic type of 1, 2, 4 or 8 bytes).
 template <typename T> inline T byteSwapped(T value) {
   static_assert(std::is_trivially_copyable_v<T>);
-  // Through an unsigned integer of the same size: one byte-swap instruction.
+  // Through an unsigned integer of the same size: a byte-swap instruction, which vectorises (reversing the
+  // bytes in an array did not, and made GCC 12 warn of overflows).
   if constexpr (sizeof(T) == 1) {
     return value;
   } else {
