@@ -4,7 +4,6 @@
 
 #include "accel/acceleration.h"
 #include "mesh/mesh_view.h"
-#include "render/integrator.h"
 #include "render/scene_view.h"
 
 namespace uvr {
