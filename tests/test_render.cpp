@@ -631,3 +631,103 @@ TEST(Renderer, LeafSizeIsTheDefaultUnlessGiven) {
   given.prepare(Backend::Cpu);
   EXPECT_GT(given.partitionCount(Backend::Cpu), byDefault.partitionCount(Backend::Cpu));
 }
+
+// A thin shell of the transfer function, far thinner than the step, on a field linear along the rays: point
+// samples mostly step over it, pre-integration finds its optical depth exactly wherever a ray crosses it.
+TEST_P(Integrator, PreintegrationFindsAShellThinnerThanTheStep) {
+  // f runs from 0 to 1 over x in [-1, 1]; the function is opaque only for f in [0.49, 0.51], x in ±0.02.
+  const Mesh mesh =
+      buildMesh(makeBoxGrid(CellType::Tetra, 8, kBox, [](Vec3f p) { return 0.5f * (p.x + 1.f); }), "box");
+  Renderer renderer(mesh, mesh.findField("f"), 64);
+  const float alpha = 0.5f;
+  ColorMap shell;
+  shell.rgbPoints = {0.f, 1.f, 1.f, 1.f, 1.f, 1.f, 1.f, 1.f};
+  shell.opacityPoints = {0.f,   0.f,   0.5f, 0.f, 0.4899f, 0.f, 0.5f, 0.f, 0.49f, alpha, 0.5f, 0.f,
+                         0.51f, alpha, 0.5f, 0.f, 0.5101f, 0.f, 0.5f, 0.f, 1.f,   0.f,   0.5f, 0.f};
+  renderer.setTransferFunction(TransferFunction(shell, 0.f, 1.f));
+  Camera camera;
+  camera.eye = {6.f, 0.1f, 0.2f};
+  camera.at = {0.f, 0.f, 0.f};
+  camera.up = {0.f, 0.f, 1.f};
+  camera.fovy = 12.f;
+  const float kappa = -std::log(1.f - alpha) / 0.1f;
+  for (RenderMode mode : {RenderMode::Reference, RenderMode::Full}) {
+    for (bool preintegrate : {false, true}) {
+      RenderSettings settings = settingsFor(mode, 0.5f, 1.f);
+      settings.integrator.preintegrate = preintegrate;
+      const Frame frame = renderer.render(camera, settings);
+      const CameraView view = makeCameraView(camera, settings.width, settings.height);
+      int crossing = 0, right = 0;
+      for (int y = 0; y < settings.height; ++y)
+        for (int x = 0; x < settings.width; ++x) {
+          const Ray ray = view.ray(x, y);
+          // The ray's path through the slab |x| <= 0.02, where it lies inside the box.
+          const float t0 = (0.02f - ray.origin.x) * ray.invDirection.x;
+          const float t1 = (-0.02f - ray.origin.x) * ray.invDirection.x;
+          const Vec3f p0 = ray.origin + ray.direction * t0, p1 = ray.origin + ray.direction * t1;
+          auto inside = [](Vec3f p) { return std::fabs(p.y) < 0.95f && std::fabs(p.z) < 0.95f; };
+          if (!inside(p0) || !inside(p1))
+            continue;
+          ++crossing;
+          const float expected = 1.f - std::exp(-kappa * (t1 - t0) * length(ray.direction));
+          right += std::fabs(frame.opacity[size_t(y * settings.width + x)] - expected) < 0.03f;
+        }
+      ASSERT_GT(crossing, 64 * 64 / 4);
+      if (preintegrate)
+        EXPECT_EQ(right, crossing) << modeName(mode);
+      else
+        EXPECT_LT(right, crossing / 2) << modeName(mode); // the test tells the two apart
+    }
+  }
+}
+
+// Each partition's step scale is its cells' size against the mesh's, as a power of two: cubes of half the
+// edge (an eighth of the volume, 3 * 256 apart in log2) halve it.
+TEST(Partitions, StepScalesAreTheCellSizeRatioAsAPowerOfTwo) {
+  const int64_t mesh = -2000, half = mesh - 768, quarter = mesh - 2 * 768, twice = mesh + 768;
+  const std::vector<uint64_t> counts{10, 10, 10, 10, 10};
+  const std::vector<int64_t> sums{10 * mesh, 10 * half, 10 * quarter, 10 * twice, 10 * (mesh + 1000)};
+  // Leaves 0-4 under a root with two inner nodes.
+  std::vector<KdNode> nodes(9);
+  nodes[0] = {0.f, 0, 1};
+  nodes[1] = {0.f, 1, 3};
+  nodes[2] = {0.f, 1, 5};
+  nodes[3] = {0.f, KdNode::kLeaf, 0};
+  nodes[4] = {0.f, 2, 7};
+  nodes[5] = {0.f, KdNode::kLeaf, 3};
+  nodes[6] = {0.f, KdNode::kLeaf, 4};
+  nodes[7] = {0.f, KdNode::kLeaf, 1};
+  nodes[8] = {0.f, KdNode::kLeaf, 2};
+  const StepScales scales = computeStepScales(sums, counts, nodes);
+  // The mesh's mean is mesh - 768 * 0.4 + 200 = mesh - 107: within half a power of two of leaf 0.
+  EXPECT_EQ(scales.partition, (std::vector<float>{1.f, 0.5f, 0.25f, 2.f, 2.f}));
+  EXPECT_EQ(scales.finest, 0.25f);
+  EXPECT_EQ(scales.node[0], 2.f);
+  EXPECT_EQ(scales.node[1], 1.f); // over leaves 0, 1 and 2
+  EXPECT_EQ(scales.node[4], 0.5f);
+  EXPECT_EQ(scales.node[2], 2.f);
+}
+
+// On a graded mesh, steps that follow the mesh take fewer samples where cells are large and more where they
+// are small, and keep the analytic transmittance to within the longest step.
+TEST_P(Integrator, LocalStepsFollowAGradedMesh) {
+  Mesh mesh = buildMesh(makeBoxGrid(CellType::Tetra, 16, kBox, [](Vec3f) { return 0.5f; }), "graded");
+  for (Vec3f &p : mesh.points) // cells shrink towards x = -1, by a factor of 64 across the box
+    p.x = -1.f + 2.f * (std::pow(64.f, 0.5f * (p.x + 1.f)) - 1.f) / 63.f;
+  Renderer renderer(mesh, mesh.findField("f"), 64);
+  const float alphaPerUnit = 0.3f;
+  renderer.setTransferFunction(TransferFunction(constantMap(alphaPerUnit), 0.f, 1.f));
+  renderer.prepare(Backend::Cpu); // whose partitions the test reads
+  renderer.prepare(gBackend);
+  const Partitions &parts = renderer.partitions();
+  const auto [finest, coarsest] = std::minmax_element(parts.stepScale.begin(), parts.stepScale.end());
+  EXPECT_LE(*finest, 0.5f);
+  EXPECT_GE(*coarsest, 2.f);
+  EXPECT_EQ(parts.finestStepScale, *finest);
+  RenderSettings global = settingsFor(RenderMode::Full, 0.02f, 0.02f);
+  RenderSettings local = global;
+  local.integrator.followMesh = true;
+  expectExponentialTransmittance(renderer, local, alphaPerUnit, 0.02f * *coarsest, 1e-5f);
+  const Frame a = renderer.render(obliqueCamera(), global), b = renderer.render(obliqueCamera(), local);
+  EXPECT_NE(a.samplesTotal, b.samplesTotal);
+}

@@ -7,6 +7,8 @@ namespace uvr {
 nlohmann::json frameStatsJson(const FrameStats &s) {
   nlohmann::json stats = {
       {"mode", modeName(s.mode)},
+      {"compositing", s.preintegrated ? "preintegrated" : "point"},
+      {"steps", s.localSteps ? "local" : "global"},
       {"width", s.width},
       {"height", s.height},
       {"cells", s.cells},

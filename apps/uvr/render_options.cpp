@@ -46,6 +46,14 @@ void addRenderOptions(CLI::App *cmd, RenderOptions &o) {
   cmd->add_option("--mode", o.mode, "reference | skip | adaptive | full")
       ->check(CLI::IsMember({"reference", "skip", "adaptive", "full"}))
       ->capture_default_str();
+  cmd->add_option("--compositing", o.compositing,
+                  "point | preintegrated | auto (pre-integrated in full, point samples in the other modes)")
+      ->check(CLI::IsMember({"auto", "point", "preintegrated"}))
+      ->capture_default_str();
+  cmd->add_option("--steps", o.steps,
+                  "global | local | auto (local in full: each partition's steps scaled to its cells' size)")
+      ->check(CLI::IsMember({"auto", "global", "local"}))
+      ->capture_default_str();
   cmd->add_option("--s1", o.s1, "Smallest (and fixed) step (default: cube root of the median cell volume)");
   cmd->add_option("--s2", o.s2, "Largest adaptive step (default: 8 * the default s1)");
   cmd->add_option("--p", o.p, "Adaptive power, >= 1 (default: 4)");
@@ -82,6 +90,8 @@ FrameSettings parseFrameSettings(const RenderOptions &o) {
   settings.backend = parseBackendOption(o.backend);
   settings.background = parseVector(o.background, "background");
   settings.mode = parseMode(o.mode);
+  settings.compositing = parseCompositing(o.compositing);
+  settings.steps = parseStepSizing(o.steps);
   settings.s1 = o.s1;
   settings.s2 = o.s2;
   settings.p = o.p;

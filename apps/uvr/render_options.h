@@ -20,6 +20,8 @@ struct RenderOptions {
   std::string tfName;
   std::vector<float> range;
   std::string mode = "full";
+  std::string compositing = "auto";
+  std::string steps = "auto";
   float s1 = 0.f, s2 = 0.f, p = 0.f, unit = 0.f;
   uint32_t leafSize = kAutoLeafSize;
   std::string size = "1024x1024";

@@ -28,6 +28,9 @@ struct ValueRange {
 struct VolumeStats {
   double min = 0.0, median = 0.0, max = 0.0;
   double p1 = 0.0, p99 = 0.0; ///< 1st and 99th percentiles: their ratio shows how graded a mesh is
+  /// The median of each cell's volume per tetrahedron it splits into (hexahedron 6, wedge 3, pyramid 2): a
+  /// cell's size measured alike for every type, which the default step is taken from.
+  double medianPerTet = 0.0;
 };
 
 struct CellCounts {

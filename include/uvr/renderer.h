@@ -19,6 +19,9 @@ namespace uvr {
 /// What one frame cost and took, with the settings it was drawn with (defaults filled in).
 struct FrameStats {
   RenderMode mode = RenderMode::Full;
+  /// Whether segments were composited pre-integrated (FrameSettings::compositing), and steps followed the
+  /// mesh (FrameSettings::steps).
+  bool preintegrated = false, localSteps = false;
   int width = 0, height = 0;
   uint64_t cells = 0;
   uint32_t partitions = 0;

@@ -20,6 +20,34 @@ const char *modeName(RenderMode mode);
 /// Parses reference|skip|adaptive|full; throws uvr::Error otherwise.
 RenderMode parseMode(const std::string &name);
 
+/// How the samples along a ray are composited.
+enum class Compositing : uint8_t {
+  Auto,         ///< pre-integrated in `full`; point samples in the paper's other modes
+  Point,        ///< each sample's colour over the distance to the next (the paper's)
+  Preintegrated ///< each segment between two samples integrated over the values between them
+};
+
+/// auto, point or preintegrated.
+const char *compositingName(Compositing compositing);
+/// Parses auto|point|preintegrated; throws uvr::Error otherwise.
+Compositing parseCompositing(const std::string &name);
+/// Whether frames of `mode` composite pre-integrated under `compositing`.
+bool preintegrates(Compositing compositing, RenderMode mode);
+
+/// How the step sizes vary over the mesh.
+enum class StepSizing : uint8_t {
+  Auto,   ///< local in `full`; global in the paper's other modes
+  Global, ///< s1 (and s2) alike everywhere (the paper's)
+  Local   ///< each partition's steps scaled by its cells' size against the mesh's, by 1/8 to 8 (powers of 2)
+};
+
+/// auto, global or local.
+const char *stepSizingName(StepSizing sizing);
+/// Parses auto|global|local; throws uvr::Error otherwise.
+StepSizing parseStepSizing(const std::string &name);
+/// Whether frames of `mode` take local steps under `sizing`.
+bool stepsFollowMesh(StepSizing sizing, RenderMode mode);
+
 enum class Backend : uint8_t {
   Cpu, ///< all cores
   Cuda ///< one GPU; see backendAvailable
@@ -44,6 +72,8 @@ struct FrameSettings {
   float s2 = 0.f;   ///< largest adaptive step; default: 8 x the default step, at least s1
   float p = 0.f;    ///< adaptive power, >= 1; default 4
   float unit = 0.f; ///< opacity unit distance; default: the default step
+  Compositing compositing = Compositing::Auto;
+  StepSizing steps = StepSizing::Auto;
   int width = 1024;
   int height = 1024;
   Vec3f background{0.f, 0.f, 0.f}; ///< RGB in [0, 1], under the volume

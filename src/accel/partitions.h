@@ -9,6 +9,7 @@
 #include "mesh/mesh_view.h"
 
 #include <cstdint>
+#include <cstring>
 #include <vector>
 
 namespace uvr {
@@ -27,8 +28,11 @@ struct PartitionsView {
   const Box3f *nodeBounds = nullptr; ///< per node, the union of the shrunk boxes of the partitions below
   const float *valueMin = nullptr;   ///< scalar range per partition, for the transfer-function metadata
   const float *valueMax = nullptr;
-  Box3f rootBounds; ///< the mesh bounds, slightly padded: the KD-tree's root cell
+  const float *stepScale = nullptr;        ///< per partition, see PartitionArrays
+  const float *nodeMaxStepScale = nullptr; ///< per KD node, the largest stepScale below
+  Box3f rootBounds;                        ///< the mesh bounds, slightly padded: the KD-tree's root cell
   uint32_t count = 0;
+  float finestStepScale = 1.f; ///< the smallest stepScale
 };
 
 template <typename Storage> struct PartitionArrays {
@@ -38,11 +42,18 @@ template <typename Storage> struct PartitionArrays {
   Array<Box3f> bounds;             ///< shrunk box per partition (what nodeBounds holds for its leaf)
   Array<float> valueMin, valueMax; ///< scalar range of the cells listed in each partition
   Array<uint64_t> cellCounts;      ///< cells listed (a cell straddling leaves is listed in each)
+  /// Per partition, the size of its cells against the mesh's, as a power of two from 1/8 to 8 (see
+  /// assignStepScales): steps that follow the mesh scale by it.
+  Array<float> stepScale;
+  Array<float> nodeMaxStepScale; ///< per KD node, the largest stepScale below
   Box3f rootBounds;
+  float finestStepScale = 1.f;
 
   uint32_t count() const { return uint32_t(bounds.size()); }
   PartitionsView view() const {
-    return {nodes.data(), nodeBounds.data(), valueMin.data(), valueMax.data(), rootBounds, count()};
+    return {nodes.data(),    nodeBounds.data(), valueMin.data(),
+            valueMax.data(), stepScale.data(),  nodeMaxStepScale.data(),
+            rootBounds,      count(),           finestStepScale};
   }
   template <typename A, typename B, typename F> static void forEachMember(A &a, B &b, F &&f) {
     f(a.nodes, b.nodes);
@@ -51,7 +62,10 @@ template <typename Storage> struct PartitionArrays {
     f(a.valueMin, b.valueMin);
     f(a.valueMax, b.valueMax);
     f(a.cellCounts, b.cellCounts);
+    f(a.stepScale, b.stepScale);
+    f(a.nodeMaxStepScale, b.nodeMaxStepScale);
     f(a.rootBounds, b.rootBounds);
+    f(a.finestStepScale, b.finestStepScale);
   }
 };
 using Partitions = PartitionArrays<HostStorage>;
@@ -95,6 +109,30 @@ inline float partitionPadding(const Box3f &meshBounds) { return 1e-5f * length(m
 /// splits halve the cells at each level, so 32 levels hold the 2^32 cells that 32-bit indices can name; a
 /// traversal's stack, one entry per level at most, stays as small (on a GPU it lives in local memory).
 constexpr int kMaxPartitionDepth = 32;
+
+/// log2 of the volume of a cell's box in 1/256ths, read off the float's exponent and mantissa (within 0.09
+/// of log2, and the same on host and GPU, so that both builds scale steps alike): what a partition's step
+/// scale averages. A flat box counts as a sixteenth of its longest side thick.
+UVR_HOST_DEVICE inline int32_t cellSizeLog2(const Box3f &box) {
+  const Vec3f e = box.upper - box.lower;
+  const float thinnest = maxf(maxf(e.x, maxf(e.y, e.z)) * (1.f / 16.f), 1e-12f);
+  const float volume = maxf(e.x, thinnest) * maxf(e.y, thinnest) * maxf(e.z, thinnest);
+  uint32_t bits;
+  memcpy(&bits, &volume, sizeof bits);
+  return (int32_t(bits) - (127 << 23)) >> 15;
+}
+
+struct StepScales {
+  std::vector<float> partition, node; ///< PartitionArrays::stepScale and nodeMaxStepScale
+  float finest = 1.f;
+};
+
+/// The partitions' step scales from the sums of cellSizeLog2 over each partition's `cellCounts` cells: the
+/// ratio of the geometric mean cell size in a partition to the mesh's, rounded to a power of two from 1/8 to
+/// 8 (a partition whose cells are within a factor of 1.41 of the mesh's keeps steps of s1). On the host for
+/// both builds, in integers to the rounding: both scale alike.
+StepScales computeStepScales(const std::vector<int64_t> &sizeLog2Sums,
+                             const std::vector<uint64_t> &cellCounts, const std::vector<KdNode> &nodes);
 
 /// The scalar range a cell contributes to its partitions: empty where it holds only NaN, [0, 0] for geometry
 /// alone (no field).

@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <type_traits>
 #include <utility>
 
@@ -21,6 +22,7 @@ namespace {
 struct CellInfo {
   Box3f bounds;
   float valueMin, valueMax;
+  int32_t sizeLog2; ///< cellSizeLog2
 };
 
 /// What a leaf gathers from the cells whose boxes touch it.
@@ -28,18 +30,21 @@ struct LeafAccumulator {
   Box3f cells;
   float valueMin = INFINITY, valueMax = -INFINITY;
   uint64_t count = 0;
+  int64_t sizeLog2Sum = 0;
 
   void add(const CellInfo &cell) {
     cells.extend(cell.bounds);
     valueMin = minf(valueMin, cell.valueMin);
     valueMax = maxf(valueMax, cell.valueMax);
     ++count;
+    sizeLog2Sum += cell.sizeLog2;
   }
   void merge(const LeafAccumulator &other) {
     cells.extend(other.cells);
     valueMin = minf(valueMin, other.valueMin);
     valueMax = maxf(valueMax, other.valueMax);
     count += other.count;
+    sizeLog2Sum += other.sizeLog2Sum;
   }
 };
 
@@ -171,6 +176,35 @@ private:
 
 } // namespace
 
+StepScales computeStepScales(const std::vector<int64_t> &sizeLog2Sums,
+                             const std::vector<uint64_t> &cellCounts, const std::vector<KdNode> &nodes) {
+  int64_t sum = 0;
+  uint64_t count = 0;
+  for (size_t i = 0; i < cellCounts.size(); ++i) {
+    sum += sizeLog2Sums[i];
+    count += cellCounts[i];
+  }
+  StepScales scales;
+  scales.partition.assign(cellCounts.size(), 1.f);
+  for (size_t i = 0; i < cellCounts.size() && count > 0; ++i) {
+    if (cellCounts[i] == 0)
+      continue;
+    // Volumes in 1/256ths of log2: a length ratio of 2 is 3 * 256 apart.
+    const double ratio =
+        (double(sizeLog2Sums[i]) / double(cellCounts[i]) - double(sum) / double(count)) / 768.0;
+    scales.partition[i] = std::ldexp(1.f, int(std::clamp(std::lround(ratio), -3l, 3l)));
+  }
+  scales.node.assign(nodes.size(), 1.f);
+  for (size_t node = nodes.size(); node-- > 0;) { // children follow their parents
+    const KdNode &n = nodes[node];
+    scales.node[node] = n.axis == KdNode::kLeaf ? scales.partition[n.child]
+                                                : std::max(scales.node[n.child], scales.node[n.child + 1]);
+  }
+  for (float s : scales.partition)
+    scales.finest = std::min(scales.finest, s);
+  return scales;
+}
+
 Partitions buildPartitions(const MeshView &mesh, uint32_t leafSize) {
   const uint64_t cellCount = mesh.cellCount();
   if (cellCount == 0)
@@ -186,6 +220,7 @@ Partitions buildPartitions(const MeshView &mesh, uint32_t leafSize) {
                         CellInfo &info = cells[c];
                         info.bounds = cellBounds(mesh, c);
                         cellValueRange(mesh, c, info.valueMin, info.valueMax);
+                        info.sizeLog2 = cellSizeLog2(info.bounds);
                       }
                     });
 
@@ -220,6 +255,7 @@ Partitions buildPartitions(const MeshView &mesh, uint32_t leafSize) {
   parts.valueMin.resize(leafCount);
   parts.valueMax.resize(leafCount);
   parts.cellCounts.resize(leafCount);
+  std::vector<int64_t> sizeLog2Sums(leafCount);
   tbb::parallel_for(uint32_t(0), leafCount, [&](uint32_t i) {
     LeafAccumulator leaf;
     for (const std::vector<LeafAccumulator> &local : perThread)
@@ -230,7 +266,12 @@ Partitions buildPartitions(const MeshView &mesh, uint32_t leafSize) {
     parts.valueMin[i] = leaf.valueMin;
     parts.valueMax[i] = leaf.valueMax;
     parts.cellCounts[i] = leaf.count;
+    sizeLog2Sums[i] = leaf.sizeLog2Sum;
   });
+  StepScales scales = computeStepScales(sizeLog2Sums, parts.cellCounts, parts.nodes);
+  parts.stepScale = std::move(scales.partition);
+  parts.nodeMaxStepScale = std::move(scales.node);
+  parts.finestStepScale = scales.finest;
   // Children follow their parents in `nodes`, so one backward pass gathers each subtree's box.
   parts.nodeBounds.assign(parts.nodes.size(), Box3f{});
   for (size_t node = parts.nodes.size(); node-- > 0;) {

@@ -192,7 +192,7 @@ VolumeStats VolumeMesh::volumeStats() const {
   return impl_->stats;
 }
 
-float VolumeMesh::defaultStep() const { return defaultStepSize(volumeStats()); }
+float VolumeMesh::defaultStep() const { return defaultStepSize(volumeStats(), bounds()); }
 
 uint32_t VolumeMesh::defaultLeafSize() const { return uvr::defaultLeafSize(cellCount()); }
 

@@ -69,6 +69,8 @@ void VolumeRenderer::render(const Camera &camera, const FrameSettings &settings,
   internal.integrator.s2 = s.s2;
   internal.integrator.p = s.p;
   internal.integrator.unit = s.unit;
+  internal.integrator.preintegrate = preintegrates(s.compositing, s.mode);
+  internal.integrator.followMesh = stepsFollowMesh(s.steps, s.mode);
   internal.background = s.background;
   internal.width = s.width;
   internal.height = s.height;
@@ -91,6 +93,8 @@ void VolumeRenderer::render(const Camera &camera, const FrameSettings &settings,
   FrameStats &stats = result.stats;
   stats = FrameStats{};
   stats.mode = s.mode;
+  stats.preintegrated = internal.integrator.preintegrate;
+  stats.localSteps = internal.integrator.followMesh;
   stats.width = s.width;
   stats.height = s.height;
   stats.cells = impl_->mesh.cellCount();

@@ -38,6 +38,53 @@ RenderMode parseMode(const std::string &name) {
   throw Error("unknown mode '" + name + "': expected reference, skip, adaptive or full");
 }
 
+const char *compositingName(Compositing compositing) {
+  switch (compositing) {
+  case Compositing::Auto:
+    return "auto";
+  case Compositing::Point:
+    return "point";
+  case Compositing::Preintegrated:
+    return "preintegrated";
+  }
+  return "?";
+}
+
+Compositing parseCompositing(const std::string &name) {
+  for (Compositing c : {Compositing::Auto, Compositing::Point, Compositing::Preintegrated})
+    if (name == compositingName(c))
+      return c;
+  throw Error("unknown compositing '" + name + "': expected auto, point or preintegrated");
+}
+
+bool preintegrates(Compositing compositing, RenderMode mode) {
+  return compositing == Compositing::Preintegrated ||
+         (compositing == Compositing::Auto && mode == RenderMode::Full);
+}
+
+const char *stepSizingName(StepSizing sizing) {
+  switch (sizing) {
+  case StepSizing::Auto:
+    return "auto";
+  case StepSizing::Global:
+    return "global";
+  case StepSizing::Local:
+    return "local";
+  }
+  return "?";
+}
+
+StepSizing parseStepSizing(const std::string &name) {
+  for (StepSizing s : {StepSizing::Auto, StepSizing::Global, StepSizing::Local})
+    if (name == stepSizingName(s))
+      return s;
+  throw Error("unknown step sizing '" + name + "': expected auto, global or local");
+}
+
+bool stepsFollowMesh(StepSizing sizing, RenderMode mode) {
+  return sizing == StepSizing::Local || (sizing == StepSizing::Auto && mode == RenderMode::Full);
+}
+
 const char *backendName(Backend backend) { return backend == Backend::Cuda ? "cuda" : "cpu"; }
 
 Backend parseBackend(const std::string &name) {

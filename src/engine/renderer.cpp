@@ -5,12 +5,16 @@
 #include <uvr/error.h>
 #include <uvr/system.h>
 
+#include <sstream>
+
 namespace uvr {
 
 Renderer::Renderer(const Mesh &mesh, int fieldIndex, uint32_t leafSize) : mesh_(mesh), leafSize_(leafSize) {
   if (fieldIndex < 0 || size_t(fieldIndex) >= mesh.fields.size())
     throw Error("the mesh has no scalar field to render");
   meshView_ = makeMeshView(mesh_, fieldIndex);
+  const Box3f bounds = mesh.bounds();
+  diagonal_ = bounds.lower.x <= bounds.upper.x ? length(bounds.upper - bounds.lower) : 0.f;
 }
 
 Renderer::~Renderer() = default;
@@ -86,6 +90,12 @@ void Renderer::render(const Camera &camera, const RenderSettings &settings, Fram
   const IntegratorSettings &s = settings.integrator;
   if (!(s.s1 > 0.f) || !(s.s2 >= s.s1) || !(s.p >= 1.f) || !(s.unit > 0.f))
     throw Error("invalid sampling settings: need s1 > 0, s2 >= s1, p >= 1 and unit > 0");
+  if (diagonal_ / s.s1 > kMostSamplesPerRay) {
+    std::ostringstream what;
+    what << "step s1 = " << s.s1 << " takes " << diagonal_ / s.s1
+         << " samples along the mesh's diagonal, more than the " << kMostSamplesPerRay << " a ray may take";
+    throw Error(what.str());
+  }
   if (settings.width <= 0 || settings.height <= 0)
     throw Error("invalid image size");
   prepare(settings.backend);

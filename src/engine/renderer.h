@@ -38,6 +38,10 @@ struct Frame {
   double kernelMs = 0.0; ///< the GPU time of the frame's kernels (CUDA), without copies; 0 on the CPU
 };
 
+/// The most steps of s1 a ray may take along the mesh bounds' diagonal: far fewer are ever of use, and with
+/// steps that follow the mesh (down to s1 / 8) the march's float grid indices stay exact (SampleGrid).
+constexpr float kMostSamplesPerRay = float(1 << 20);
+
 class Renderer {
 public:
   /// Renders field `fieldIndex` of `mesh`, which must outlive the renderer, with partitions of up to
@@ -94,6 +98,7 @@ private:
 
   const Mesh &mesh_;
   MeshView meshView_;
+  float diagonal_ = 0.f; ///< of the mesh bounds
   uint32_t leafSize_;
   std::optional<TransferFunction> tf_;
   uint32_t transparentPartitions_ = 0;

@@ -90,6 +90,17 @@ VolumeStats volumeStats(const Mesh &mesh) {
   stats.median = at(count / 2);
   stats.p1 = at(count / 100);
   stats.p99 = at(count - 1 - count / 100);
+  stats.medianPerTet = stats.median;
+  if (mesh.tetCount() != count) {
+    tbb::parallel_for(uint64_t(0), count, [&](uint64_t c) {
+      const CellType type = cellType(view, c);
+      volumes[c] /= type == CellType::Hexahedron ? 6.0
+                    : type == CellType::Wedge    ? 3.0
+                    : type == CellType::Pyramid  ? 2.0
+                                                 : 1.0;
+    });
+    stats.medianPerTet = at(count / 2);
+  }
   return stats;
 }
 
@@ -103,6 +114,14 @@ ValueRange valueRange(const ScalarField &field) {
   return lo <= hi ? ValueRange{lo, hi} : ValueRange{};
 }
 
-float defaultStepSize(const VolumeStats &volumes) { return float(std::cbrt(volumes.median)); }
+float defaultStepSize(const VolumeStats &volumes, const Box3f &bounds) {
+  if (!(bounds.lower.x <= bounds.upper.x))
+    return 0.f;
+  const Vec3f extent = bounds.upper - bounds.lower;
+  const double diagonal = double(length(extent));
+  const double thinnest = std::min({extent.x, extent.y, extent.z});
+  const double step = std::cbrt(volumes.medianPerTet);
+  return float(std::max(std::min(step, 0.25 * thinnest), 1e-4 * diagonal));
+}
 
 } // namespace uvr

@@ -14,8 +14,11 @@ VolumeStats volumeStats(const Mesh &mesh);
 /// Range of a field's finite values; {0, 0} when it has none.
 ValueRange valueRange(const ScalarField &field);
 
-/// The default step s1: the edge of a cube of the median cell volume, about half a typical tet's edge, so
-/// that a ray takes about two samples per cell it crosses.
-float defaultStepSize(const VolumeStats &volumes);
+/// The default step s1: the edge of a cube of the median volume per tetrahedron (VolumeStats::medianPerTet),
+/// about half a typical tet's edge, so that a ray takes about two samples per cell it crosses; but at least
+/// 1/10^4 of the bounds' diagonal, so that no ray of a mesh with tiny or degenerate cells takes more samples,
+/// and at most a quarter of the bounds' thinnest side, so that a mesh of a few cells is sampled through.
+/// 0 where the bounds are empty or a point.
+float defaultStepSize(const VolumeStats &volumes, const Box3f &bounds);
 
 } // namespace uvr

@@ -22,16 +22,19 @@ struct RayResult {
   uint32_t samples = 0;
 };
 
-/// Opacity correction (paper §2.4): the opacity of a sample that stands for `distance` along the ray, where
-/// the transfer function gives `alpha` per `unit` distance.
-UVR_HOST_DEVICE inline float correctedOpacity(float alpha, float distance, float unit) {
-  const float exponent = distance / unit;
-  // At the default unit, s1, fixed steps need no correction, and powf is costly on a CPU.
-  return exponent == 1.f ? minf(alpha, 1.f) : 1.f - powf(maxf(1.f - alpha, 0.f), exponent);
+/// Adds a segment of colour `c` (rgb, opacity) behind what `color` (premultiplied rgb, opacity) holds.
+UVR_HOST_DEVICE inline void compositeBehind(Vec4f &color, const Vec4f &c) {
+  const float weight = (1.f - color.w) * c.w;
+  color.x += weight * c.x;
+  color.y += weight * c.y;
+  color.z += weight * c.z;
+  color.w += weight;
 }
 
 /// The march of one ray through its intervals: samples each on the ray's grid, looks the samples up in the
-/// transfer function and composites them front to back, until the ray is opaque.
+/// transfer function and composites them front to back, until the ray is opaque. Point compositing (the
+/// paper's) gives each sample's colour to the distance to the next sample; pre-integration gives each
+/// segment between two samples the function integrated over the values between them.
 template <class Sampling> struct RayMarch {
   const SceneView &scene;
   const IntegratorSettings &settings;
@@ -40,25 +43,41 @@ template <class Sampling> struct RayMarch {
   uint32_t &hint; ///< set to the ray's first cell
   RayResult result = {};
   bool first = true;
+  /// Pre-integrating, the last sample: its segment reaches to grid point `next`, and is integrated to the
+  /// value there (the next sample's, or where the march samples there no more, one taken to close the
+  /// segment).
+  struct Pending {
+    float value = 0.f, k = 0.f, next = 0.f;
+    bool valid = false;
+  } pending;
+
+  UVR_HOST_DEVICE RayMarch(const SceneView &scene, const IntegratorSettings &settings,
+                           RayIntervals &intervals, RaySampler<Sampling> &sampler, uint32_t &hint)
+      : scene(scene), settings(settings), intervals(intervals), sampler(sampler), hint(hint) {}
 
   /// Samples [ta, tb) every `step`, rounded to whole grid spacings; false once the ray is opaque. Not forced
   /// inline: called from two places (reference, and the partitions' traversal), the host keeps one copy,
   /// which was faster than two.
   UVR_HOST_DEVICE bool interval(float ta, float tb, float step) {
     const SampleGrid &grid = intervals.grid();
-    const float s1 = grid.spacing;
+    const float spacing = grid.spacing;
     float k = grid.indexAt(ta);
+    // Skipped space lies between the last interval and this one: a thin feature of the function near the
+    // last interval's end is found only by integrating to its end.
+    if (pending.valid && k != pending.next && !closeSegment())
+      return false;
     // A sample stands for the distance to the next one; the last one before tb for the distance to the grid
     // point where the next interval's samples begin, so that intervals marched with longer steps neither
-    // overlap nor leave gaps at partition boundaries (with step s1 nothing changes).
+    // overlap nor leave gaps at partition boundaries (with a step of one spacing nothing changes).
     const float kEnd = grid.indexAt(tb);
     // Whole fixed steps: every sample is one of reference's, and at the default unit the opacity needs no
     // correction for most of them.
-    const float stride = maxf(1.f, rintf(step / s1));
+    const float stride = maxf(1.f, rintf(step / spacing));
     // A longer step crosses proportionally more tets; past a seed voxel, the seed lies nearer than the
     // previous sample.
     const int walkSteps = 8 * int(stride);
-    const bool far = stride * s1 > scene.seeds.grid.voxelEdge();
+    const bool far = stride * spacing > scene.seeds.grid.voxelEdge();
+    const bool preintegrate = settings.preintegrate;
     // In registers, not in `result`: with the sampler inlined on the host, the loop makes no call, and each
     // sample's colour does not wait on the store of the last one's.
     Vec4f color = result.color;
@@ -81,22 +100,31 @@ template <class Sampling> struct RayMarch {
       }
       ++samples;
       float value;
-      if (!sampler.sample(t, k, walkSteps, far, value))
+      if (!sampler.sample(t, k, walkSteps, far, value)) {
+        if (preintegrate)
+          flush(color, spacing);
         continue;
+      }
       if (first) {
         hint = sampler.cell();
         first = false;
       }
-      const Vec4f c = scene.tf.sample(value);
-      if (c.w <= 0.f)
-        continue;
       const bool last = !(grid.at(k + stride) < tb);
-      const float weight =
-          (1.f - color.w) * correctedOpacity(c.w, (last ? kEnd - k : stride) * s1, settings.unit);
-      color.x += weight * c.x;
-      color.y += weight * c.y;
-      color.z += weight * c.z;
-      color.w += weight;
+      if (preintegrate) {
+        if (pending.valid) {
+          const bool joined = k == pending.next;
+          compositeBehind(color, scene.tf.integrate(pending.value, joined ? value : pending.value,
+                                                    ((joined ? k : pending.next) - pending.k) * spacing,
+                                                    settings.unit));
+        }
+        pending = {value, k, last ? kEnd : k + stride, true};
+      } else {
+        const Vec4f c = scene.tf.sample(value);
+        if (c.w <= 0.f)
+          continue;
+        compositeBehind(color, {c.x, c.y, c.z,
+                                correctedOpacity(c.w, (last ? kEnd - k : stride) * spacing, settings.unit)});
+      }
       if (color.w >= settings.terminationOpacity) {
         opaque = true;
         break;
@@ -105,6 +133,37 @@ template <class Sampling> struct RayMarch {
     result.color = color;
     result.samples = samples;
     return !opaque;
+  }
+
+  /// Ends the ray, closing a pending sample's segment where the ray is not yet opaque.
+  UVR_HOST_DEVICE void finish() {
+    if (pending.valid && result.color.w < settings.terminationOpacity)
+      closeSegment();
+  }
+
+private:
+  /// Integrates the pending segment to the value at its end, sampled there (its own value outside the mesh);
+  /// false once the ray is opaque.
+  UVR_HOST_DEVICE bool closeSegment() {
+    const float spacing = intervals.grid().spacing;
+    const float gridSteps = pending.next - pending.k;
+    float value = pending.value;
+    ++result.samples;
+    if (!sampler.sample(intervals.grid().at(pending.next), pending.next, 8 * int(gridSteps),
+                        gridSteps * spacing > scene.seeds.grid.voxelEdge(), value))
+      value = pending.value;
+    pending.valid = false;
+    compositeBehind(result.color,
+                    scene.tf.integrate(pending.value, value, gridSteps * spacing, settings.unit));
+    return result.color.w < settings.terminationOpacity;
+  }
+
+  UVR_HOST_DEVICE void flush(Vec4f &color, float spacing) {
+    if (!pending.valid)
+      return;
+    pending.valid = false;
+    compositeBehind(color, scene.tf.integrate(pending.value, pending.value,
+                                              (pending.next - pending.k) * spacing, settings.unit));
   }
 };
 
@@ -128,15 +187,16 @@ UVR_HOST_DEVICE inline RayResult integrateRay(const SceneView &scene, const Inte
   if (intervals.entryTet() != kNoCell)
     sampler.enter(intervals.entryTet());
   // The next ray's grid starts where it enters the mesh bounds, as this one's does.
-  sampler.follow(trail, scene.partitions.rootBounds, settings.s1);
-  RayMarch<Sampling> march{scene, settings, intervals, sampler, hint};
+  sampler.follow(trail, scene.partitions.rootBounds, intervals.grid().spacing);
+  RayMarch<Sampling> march(scene, settings, intervals, sampler, hint);
   // Here rather than in forEach: with both calls to the march inside it, the GPU's kernel spilled more.
   if (settings.mode == RenderMode::Reference) {
     // The paper's reference ray marcher: the mesh bounds in one interval, at step s1.
-    march.interval(intervals.grid().origin, intervals.boundsExit(), settings.s1);
-    return march.result;
+    march.interval(intervals.grid().origin, intervals.boundsExit(), intervals.grid().spacing);
+  } else {
+    intervals.forEach([&](float t0, float t1, float step) { return march.interval(t0, t1, step); });
   }
-  intervals.forEach([&](float t0, float t1, float step) { return march.interval(t0, t1, step); });
+  march.finish();
   return march.result;
 }
 

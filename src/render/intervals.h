@@ -36,6 +36,10 @@ struct IntegratorSettings {
   float s1 = 1.f, s2 = 1.f, p = 2.f;
   float unit = 1.f;                 ///< opacity unit distance
   float terminationOpacity = 0.99f; ///< early ray termination
+  bool preintegrate = false;        ///< composite segments pre-integrated rather than point samples
+  /// Scale each partition's steps by its cells' size (PartitionsView::stepScale), on a grid of the finest
+  /// scale's spacing, rather than one s1 for the whole mesh.
+  bool followMesh = false;
   /// Derived from s1, s2 and p by Renderer::render (finestStepSigma): partitions of greater sigma take step
   /// s1 outright, and subtrees of such partitions are marched whole. The default, +inf, computes every
   /// partition's step and, when sampling adaptively, marches every partition alone.
@@ -53,10 +57,17 @@ inline float finestStepSigma(float s1, float s2, float p) {
   return s2 > s1 ? 1.f - powf(0.5f * s1 / (s2 - s1), 1.f / p) : -INFINITY;
 }
 
+/// The spacing of a ray's sample grid: s1, or where steps follow the mesh, s1 at the finest step scale.
+UVR_HOST_DEVICE inline float gridSpacing(const IntegratorSettings &settings,
+                                         const PartitionsView &partitions) {
+  return settings.followMesh ? settings.s1 * partitions.finestStepScale : settings.s1;
+}
+
 /// The points a ray's samples lie on, t = origin + k * spacing, from where the ray enters the mesh bounds,
 /// whatever the intervals: an interval's step is a whole number of spacings and its samples start at its
 /// first grid point, so skipping alone changes no sample that contributes, and a step of one spacing
-/// reproduces the fixed-step samples exactly. k is a float: the grid is indexed past what an int holds.
+/// reproduces the fixed-step samples exactly. k is a float, exact to 2^24 grid points: Renderer::render
+/// refuses steps that would take more (kMostSamplesPerRay, times the finest step scale).
 struct SampleGrid {
   float origin = 0.f;
   float spacing = 1.f;
@@ -85,12 +96,12 @@ public:
     // values to keep (it spilled more with returns here).
     float tEnter;
     const bool hit = intersectBox(ray, scene.partitions.rootBounds, 0.f, INFINITY, tEnter, tExit_);
-    grid_ = {tEnter, settings.s1};
+    grid_ = {tEnter, gridSpacing(settings, scene.partitions)};
     skip_ = skipsSpace(settings.mode);
     adaptive_ = samplesAdaptively(settings.mode);
     // A hundredth of a step of slack at crossings: rounding never leaves out a sample that `reference` finds
     // in a cell.
-    margin_ = 0.01f * settings.s1;
+    margin_ = 0.01f * grid_.spacing;
     tStart_ = tEnter;
     tStop_ = tExit_;
     gaps_ = false;
@@ -128,11 +139,15 @@ public:
   /// The step through KD node `node`, a leaf or a subtree marched whole: the partition's adaptive step (paper
   /// §2.4), or s1 where that rounds to it or nothing is sampled adaptively.
   UVR_HOST_DEVICE float step(uint32_t node) const {
-    // A whole node's partitions all take step s1.
+    // A whole node's partitions all take the finest step: one grid spacing.
     const KdNode &n = scene_.partitions.nodes[node];
-    const bool fixed = n.axis != KdNode::kLeaf || takesFinestStep(scene_.sigma[n.child]);
-    return fixed ? settings_.s1
-                 : adaptiveStepSize(settings_.s1, settings_.s2, settings_.p, scene_.sigma[n.child]);
+    if (n.axis != KdNode::kLeaf)
+      return grid_.spacing;
+    const float scale = settings_.followMesh ? scene_.partitions.stepScale[n.child] : 1.f;
+    const float sigma = scene_.sigma[n.child];
+    return scale * (takesFinestStep(sigma)
+                        ? settings_.s1
+                        : adaptiveStepSize(settings_.s1, settings_.s2, settings_.p, sigma));
   }
 
   /// Whether the ray leaves the mesh and enters it again: grid points may then lie in a gap (pastGap).
@@ -153,7 +168,9 @@ private:
   /// `full` frame).
   UVR_HOST_DEVICE bool marchedWhole(uint32_t node) const {
     const float sigma = scene_.nodeMinSigma[node];
-    return sigma != kTransparentSigma && takesFinestStep(sigma);
+    return sigma != kTransparentSigma && takesFinestStep(sigma) &&
+           (!settings_.followMesh ||
+            scene_.partitions.nodeMaxStepScale[node] <= scene_.partitions.finestStepScale);
   }
 
   const SceneView &scene_;

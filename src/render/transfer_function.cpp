@@ -25,6 +25,21 @@ TransferFunction::TransferFunction(const ColorMap &map, float valueMin, float va
       prefixSquares_[4 * (i + 1) + size_t(k)] = prefixSquares_[4 * i + size_t(k)] + channel[k] * channel[k];
     }
   }
+  // Opacity 1 would make the extinction infinite; within a unit distance this one is opaque to 1e-6.
+  constexpr float kMostOpaque = 1.f - 1e-6f;
+  extinction_.resize(n);
+  for (size_t i = 0; i < n; ++i) {
+    const Vec4f &c = table_[i];
+    const float tau = -std::log1p(-std::min(c.w, kMostOpaque));
+    extinction_[i] = {tau * c.x, tau * c.y, tau * c.z, tau};
+  }
+  extinctionIntegral_.assign(4 * n, 0.0);
+  for (size_t i = 1; i < n; ++i) {
+    const Vec4f &a = extinction_[i - 1], &b = extinction_[i];
+    const double piece[4] = {0.5 * (a.x + b.x), 0.5 * (a.y + b.y), 0.5 * (a.z + b.z), 0.5 * (a.w + b.w)};
+    for (size_t k = 0; k < 4; ++k)
+      extinctionIntegral_[4 * i + k] = extinctionIntegral_[4 * (i - 1) + k] + piece[k];
+  }
   // Level k holds the maximum over 2^k entries from each position; positions past n - 2^k stay zero.
   const size_t levels = size_t(std::bit_width(n));
   opacityMax_.assign(levels * n, 0.f);
@@ -42,7 +57,8 @@ TransferFunction::TransferFunction(const ColorMap &map, float valueMin, float va
 TransferFunctionView TransferFunction::view() const {
   const float span = valueMax_ - valueMin_;
   const float scale = span > 0.f ? float(table_.size() - 1) / span : 0.f;
-  return {table_.data(), int(table_.size()), valueMin_, scale};
+  return {table_.data(), int(table_.size()), valueMin_,
+          scale,         extinction_.data(), extinctionIntegral_.data()};
 }
 
 TransferFunctionRangeView TransferFunction::rangeView() const {

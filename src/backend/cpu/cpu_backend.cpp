@@ -54,7 +54,8 @@ SampleTotals CpuBackend::render(const CameraView &camera, const IntegratorSettin
   constexpr int kTile = 16;
   // A trail entry per grid point along the longest ray through the mesh bounds, within reason.
   const Box3f &bounds = scene.partitions.rootBounds;
-  const float gridPoints = length(bounds.upper - bounds.lower) / settings.s1 + 2.f;
+  const float gridPoints =
+      length(bounds.upper - bounds.lower) / gridSpacing(settings, scene.partitions) + 2.f;
   const uint32_t trailSize = scene.tetNeighbors ? uint32_t(minf(gridPoints, float(1 << 20))) : 0;
   tbb::parallel_for(
       tbb::blocked_range2d<int>(0, camera.height, kTile, 0, camera.width, kTile),

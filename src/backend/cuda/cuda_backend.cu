@@ -114,9 +114,9 @@ struct CudaBackend::Impl {
   double buildMs = 0.0;
   std::vector<std::pair<std::string, double>> buildSteps;
   DeviceMetadata metadata;
-  DeviceBuffer<double> tfPrefixSum, tfPrefixSquares;
+  DeviceBuffer<double> tfPrefixSum, tfPrefixSquares, tfExtinctionIntegral;
   DeviceBuffer<float> tfOpacityMax;
-  DeviceBuffer<Vec4f> tfTable;
+  DeviceBuffer<Vec4f> tfTable, tfExtinction;
   DeviceBuffer<uint8_t> rgb;
   DeviceBuffer<float> opacity;
   DeviceBuffer<uint32_t> samples;
@@ -184,6 +184,9 @@ uint32_t CudaBackend::setTransferFunction(const TransferFunction &tf) {
   Impl &d = *impl_;
   TransferFunctionRangeView ranges = tf.rangeView();
   ranges.function.table = d.tfTable.upload(tf.table().data(), tf.table().size());
+  ranges.function.extinction = d.tfExtinction.upload(tf.extinction().data(), tf.extinction().size());
+  ranges.function.extinctionIntegral =
+      d.tfExtinctionIntegral.upload(tf.extinctionIntegral().data(), tf.extinctionIntegral().size());
   ranges.prefixSum = d.tfPrefixSum.upload(tf.prefixSums().data(), tf.prefixSums().size());
   ranges.prefixSquares = d.tfPrefixSquares.upload(tf.prefixSquares().data(), tf.prefixSquares().size());
   ranges.opacityMax = d.tfOpacityMax.upload(tf.opacityMaxima().data(), tf.opacityMaxima().size());
@@ -303,7 +306,8 @@ size_t CudaBackend::deviceSceneBytes() const {
   const Impl &d = *impl_;
   return d.points.bytes() + d.tets.bytes() + d.pyramids.bytes() + d.wedges.bytes() + d.hexes.bytes() +
          d.values.bytes() + d.accel.bytes() + d.metadata.bytes() + d.tfTable.bytes() + d.tfPrefixSum.bytes() +
-         d.tfPrefixSquares.bytes() + d.tfOpacityMax.bytes();
+         d.tfPrefixSquares.bytes() + d.tfOpacityMax.bytes() + d.tfExtinction.bytes() +
+         d.tfExtinctionIntegral.bytes();
 }
 
 uint32_t CudaBackend::partitionCount() const { return impl_->scene.partitions.count; }

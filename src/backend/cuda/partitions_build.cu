@@ -144,6 +144,7 @@ struct LeafAccumulator {
   AtomicBox cells;
   uint32_t valueMin, valueMax;
   unsigned long long count;
+  unsigned long long sizeLog2Sum; ///< of cellSizeLog2, two's complement
 };
 
 __global__ void clearLeavesKernel(uint32_t leafCount, LeafAccumulator empty, LeafAccumulator *leaves) {
@@ -163,6 +164,7 @@ __global__ void gatherLeavesKernel(MeshView mesh, uint64_t cells, const KdNode *
   const uint32_t lower[3] = {orderedBits(box.lower.x), orderedBits(box.lower.y), orderedBits(box.lower.z)},
                  upper[3] = {orderedBits(box.upper.x), orderedBits(box.upper.y), orderedBits(box.upper.z)};
   const uint32_t valueMin = orderedBits(lo), valueMax = orderedBits(hi);
+  const int32_t sizeLog2 = cellSizeLog2(box);
   forEachLeafTouching(nodes, box, [&](uint32_t leaf) {
 #if __CUDA_ARCH__ >= 800
     // Neighbouring cells mostly lie in the same leaf, and every cell's atomics on one leaf's addresses made
@@ -177,25 +179,29 @@ __global__ void gatherLeavesKernel(MeshView mesh, uint64_t cells, const KdNode *
     const uint32_t valueMinHere = __reduce_min_sync(sharing, valueMin),
                    valueMaxHere = __reduce_max_sync(sharing, valueMax);
     const unsigned long long cellsHere = __popc(sharing);
+    // At most 32 values of 16 bits: the 32-bit sum cannot overflow.
+    const long long sizeLog2Here = int32_t(__reduce_add_sync(sharing, uint32_t(sizeLog2)));
     if ((threadIdx.x & 31u) != uint32_t(__ffs(sharing) - 1))
       return;
 #else
     const uint32_t *lowerHere = lower, *upperHere = upper;
     const uint32_t valueMinHere = valueMin, valueMaxHere = valueMax;
     const unsigned long long cellsHere = 1;
+    const long long sizeLog2Here = sizeLog2;
 #endif
     LeafAccumulator &acc = leaves[leaf];
     acc.cells.extendBits(lowerHere, upperHere);
     atomicMin(&acc.valueMin, valueMinHere);
     atomicMax(&acc.valueMax, valueMaxHere);
     atomicAdd(&acc.count, cellsHere);
+    atomicAdd(&acc.sizeLog2Sum, (unsigned long long)sizeLog2Here);
   });
 }
 
 /// Each partition's box shrunk to its cells within its cell of space, padded as the host pads it.
 __global__ void finishLeavesKernel(uint32_t leafCount, const LeafAccumulator *leaves, const Box3f *leafSpace,
                                    float pad, Box3f *shrunk, float *valueMin, float *valueMax,
-                                   uint64_t *counts) {
+                                   uint64_t *counts, int64_t *sizeLog2Sums) {
   const uint64_t i = globalIndex();
   if (i >= leafCount)
     return;
@@ -204,6 +210,7 @@ __global__ void finishLeavesKernel(uint32_t leafCount, const LeafAccumulator *le
   valueMin[i] = fromOrderedBits(acc.valueMin);
   valueMax[i] = fromOrderedBits(acc.valueMax);
   counts[i] = acc.count;
+  sizeLog2Sums[i] = int64_t(acc.sizeLog2Sum);
 }
 
 /// Node boxes of one level, from the level below (children come after their parents).
@@ -317,7 +324,7 @@ void DeviceBuilder::partitions() {
                             cudaMemcpyDeviceToDevice));
   DeviceBuffer<LeafAccumulator> accumulators;
   accumulators.resize(leaves);
-  LeafAccumulator empty{AtomicBox::empty(), orderedBits(INFINITY), orderedBits(-INFINITY), 0};
+  LeafAccumulator empty{AtomicBox::empty(), orderedBits(INFINITY), orderedBits(-INFINITY), 0, 0};
   clearLeavesKernel<<<blocksFor(leaves, kBlock), kBlock>>>(leaves, empty, accumulators.data());
   UVR_CUDA_CHECK(cudaGetLastError());
   gatherLeavesKernel<<<cellBlocks(), kBlock>>>(mesh_, cells_, out_.partitions.nodes.data(),
@@ -328,10 +335,25 @@ void DeviceBuilder::partitions() {
   out_.partitions.valueMin.resize(leaves);
   out_.partitions.valueMax.resize(leaves);
   out_.partitions.cellCounts.resize(leaves);
+  DeviceBuffer<int64_t> sizeLog2Sums;
+  sizeLog2Sums.resize(leaves);
   finishLeavesKernel<<<blocksFor(leaves, kBlock), kBlock>>>(
       leaves, accumulators.data(), leafSpace.data(), pad, shrunk.data(), out_.partitions.valueMin.data(),
-      out_.partitions.valueMax.data(), out_.partitions.cellCounts.data());
+      out_.partitions.valueMax.data(), out_.partitions.cellCounts.data(), sizeLog2Sums.data());
   UVR_CUDA_CHECK(cudaGetLastError());
+  {
+    // A few numbers per partition: the host computes the scales as it does for its own build.
+    std::vector<int64_t> sums(leaves);
+    std::vector<uint64_t> counts(leaves);
+    std::vector<KdNode> hostNodes(nodeCount);
+    sizeLog2Sums.download(sums.data(), leaves);
+    out_.partitions.cellCounts.download(counts.data(), leaves);
+    out_.partitions.nodes.download(hostNodes.data(), nodeCount);
+    const StepScales scales = computeStepScales(sums, counts, hostNodes);
+    out_.partitions.stepScale.upload(scales.partition.data(), scales.partition.size());
+    out_.partitions.nodeMaxStepScale.upload(scales.node.data(), scales.node.size());
+    out_.partitions.finestStepScale = scales.finest;
+  }
   out_.partitions.nodeBounds.resize(nodeCount);
   for (auto it = levels.rbegin(); it != levels.rend(); ++it) {
     nodeBoundsKernel<<<blocksFor(it->second, kBlock), kBlock>>>(it->first, it->second,
