@@ -33,9 +33,10 @@ UVR_HOST_DEVICE inline void compositeBehind(Vec4f &color, const Vec4f &c) {
 
 /// The march of one ray through its intervals: samples each on the ray's grid, looks the samples up in the
 /// transfer function and composites them front to back, until the ray is opaque. Point compositing (the
-/// paper's) gives each sample's colour to the distance to the next sample; pre-integration gives each
-/// segment between two samples the function integrated over the values between them.
-template <class Sampling> struct RayMarch {
+/// paper's) gives each sample's colour to the distance to the next sample; pre-integration (kPreintegrate)
+/// gives each segment between two samples the function integrated over the values between them. A template
+/// parameter, not a setting: the GPU's kernel for point samples then carries none of pre-integration's state.
+template <class Sampling, bool kPreintegrate> struct RayMarch {
   const SceneView &scene;
   const IntegratorSettings &settings;
   RayIntervals &intervals;
@@ -44,8 +45,7 @@ template <class Sampling> struct RayMarch {
   RayResult result = {};
   bool first = true;
   /// Pre-integrating, the last sample: its segment reaches to grid point `next`, and is integrated to the
-  /// value there (the next sample's, or where the march samples there no more, one taken to close the
-  /// segment).
+  /// value there (the next sample's or, where the march would not sample there, one taken to close it).
   struct Pending {
     float value = 0.f, k = 0.f, next = 0.f;
     bool valid = false;
@@ -62,10 +62,6 @@ template <class Sampling> struct RayMarch {
     const SampleGrid &grid = intervals.grid();
     const float spacing = grid.spacing;
     float k = grid.indexAt(ta);
-    // Skipped space lies between the last interval and this one: a thin feature of the function near the
-    // last interval's end is found only by integrating to its end.
-    if (pending.valid && k != pending.next && !closeSegment())
-      return false;
     // A sample stands for the distance to the next one; the last one before tb for the distance to the grid
     // point where the next interval's samples begin, so that intervals marched with longer steps neither
     // overlap nor leave gaps at partition boundaries (with a step of one spacing nothing changes).
@@ -77,16 +73,22 @@ template <class Sampling> struct RayMarch {
     // previous sample.
     const int walkSteps = 8 * int(stride);
     const bool far = stride * spacing > scene.seeds.grid.voxelEdge();
-    const bool preintegrate = settings.preintegrate;
+    // Pre-integrating, where space was skipped since the pending sample, the first sample closes its segment
+    // (a thin feature of the function near the end of the last interval is found only by integrating to
+    // that end) before the march goes on from k.
+    bool closing = kPreintegrate && pending.valid && k != pending.next;
+    const float kStart = k;
+    if (closing)
+      k = pending.next;
     // In registers, not in `result`: with the sampler inlined on the host, the loop makes no call, and each
     // sample's colour does not wait on the store of the last one's.
     Vec4f color = result.color;
     uint32_t samples = result.samples;
     bool opaque = false;
-    for (float t = grid.at(k); t < tb; k += stride, t = grid.at(k)) {
+    for (float t = grid.at(k); closing || t < tb; k += stride, t = grid.at(k)) {
       // Grid points in the gaps between the ray's crossings out of the mesh and back in are passed over; the
       // march goes on from the tet the ray re-enters by.
-      if (intervals.hasGaps()) {
+      if (!closing && intervals.hasGaps()) {
         uint32_t entered;
         const float resume = intervals.pastGap(t, entered);
         if (entered != kNoCell)
@@ -100,9 +102,20 @@ template <class Sampling> struct RayMarch {
       }
       ++samples;
       float value;
-      if (!sampler.sample(t, k, walkSteps, far, value)) {
-        if (preintegrate)
-          flush(color, spacing);
+      const bool inside = sampler.sample(t, k, walkSteps, far, value);
+      if (kPreintegrate && closing) {
+        closeSegment(color, inside ? value : pending.value, spacing);
+        closing = false;
+        if (color.w >= settings.terminationOpacity) {
+          opaque = true;
+          break;
+        }
+        k = kStart - stride; // the loop's increment brings it to kStart
+        continue;
+      }
+      if (!inside) {
+        if (kPreintegrate && pending.valid)
+          closeSegment(color, pending.value, spacing);
         continue;
       }
       if (first) {
@@ -110,13 +123,9 @@ template <class Sampling> struct RayMarch {
         first = false;
       }
       const bool last = !(grid.at(k + stride) < tb);
-      if (preintegrate) {
-        if (pending.valid) {
-          const bool joined = k == pending.next;
-          compositeBehind(color, scene.tf.integrate(pending.value, joined ? value : pending.value,
-                                                    ((joined ? k : pending.next) - pending.k) * spacing,
-                                                    settings.unit));
-        }
+      if constexpr (kPreintegrate) {
+        if (pending.valid)
+          closeSegment(color, k == pending.next ? value : pending.value, spacing);
         pending = {value, k, last ? kEnd : k + stride, true};
       } else {
         const Vec4f c = scene.tf.sample(value);
@@ -137,33 +146,19 @@ template <class Sampling> struct RayMarch {
 
   /// Ends the ray, closing a pending sample's segment where the ray is not yet opaque.
   UVR_HOST_DEVICE void finish() {
-    if (pending.valid && result.color.w < settings.terminationOpacity)
-      closeSegment();
+    if (kPreintegrate && pending.valid && result.color.w < settings.terminationOpacity) {
+      // An empty interval past the segment's end: its one sample closes the segment.
+      const float t = intervals.grid().at(pending.next + 1.f);
+      interval(t, t, intervals.grid().spacing);
+    }
   }
 
 private:
-  /// Integrates the pending segment to the value at its end, sampled there (its own value outside the mesh);
-  /// false once the ray is opaque.
-  UVR_HOST_DEVICE bool closeSegment() {
-    const float spacing = intervals.grid().spacing;
-    const float gridSteps = pending.next - pending.k;
-    float value = pending.value;
-    ++result.samples;
-    if (!sampler.sample(intervals.grid().at(pending.next), pending.next, 8 * int(gridSteps),
-                        gridSteps * spacing > scene.seeds.grid.voxelEdge(), value))
-      value = pending.value;
+  /// Composites the pending segment, its value running linearly to `endValue` at its end.
+  UVR_HOST_DEVICE void closeSegment(Vec4f &color, float endValue, float spacing) {
     pending.valid = false;
-    compositeBehind(result.color,
-                    scene.tf.integrate(pending.value, value, gridSteps * spacing, settings.unit));
-    return result.color.w < settings.terminationOpacity;
-  }
-
-  UVR_HOST_DEVICE void flush(Vec4f &color, float spacing) {
-    if (!pending.valid)
-      return;
-    pending.valid = false;
-    compositeBehind(color, scene.tf.integrate(pending.value, pending.value,
-                                              (pending.next - pending.k) * spacing, settings.unit));
+    compositeBehind(color, scene.tf.integrate(pending.value, endValue, (pending.next - pending.k) * spacing,
+                                              settings.unit));
   }
 };
 
@@ -173,7 +168,7 @@ private:
 /// through the gaps between them that lie outside the mesh, where `crossings` knows them. `trail`, where
 /// the policy follows one, holds by grid point the previous ray's guesses at this ray's tets, and takes this
 /// ray's at the next one's.
-template <class Sampling>
+template <class Sampling, bool kPreintegrate = false>
 UVR_HOST_DEVICE inline RayResult integrateRay(const SceneView &scene, const IntegratorSettings &settings,
                                               const Ray &ray, uint32_t &hint,
                                               const BoundaryCrossings &crossings, CellTrail trail = {}) {
@@ -188,7 +183,7 @@ UVR_HOST_DEVICE inline RayResult integrateRay(const SceneView &scene, const Inte
     sampler.enter(intervals.entryTet());
   // The next ray's grid starts where it enters the mesh bounds, as this one's does.
   sampler.follow(trail, scene.partitions.rootBounds, intervals.grid().spacing);
-  RayMarch<Sampling> march(scene, settings, intervals, sampler, hint);
+  RayMarch<Sampling, kPreintegrate> march(scene, settings, intervals, sampler, hint);
   // Here rather than in forEach: with both calls to the march inside it, the GPU's kernel spilled more.
   if (settings.mode == RenderMode::Reference) {
     // The paper's reference ray marcher: the mesh bounds in one interval, at step s1.

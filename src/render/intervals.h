@@ -36,7 +36,7 @@ struct IntegratorSettings {
   float s1 = 1.f, s2 = 1.f, p = 2.f;
   float unit = 1.f;                 ///< opacity unit distance
   float terminationOpacity = 0.99f; ///< early ray termination
-  bool preintegrate = false;        ///< composite segments pre-integrated rather than point samples
+  bool preintegrate = false; ///< composite segments pre-integrated: the backends pick integrateRay<.., true>
   /// Scale each partition's steps by its cells' size (PartitionsView::stepScale), on a grid of the finest
   /// scale's spacing, rather than one s1 for the whole mesh.
   bool followMesh = false;

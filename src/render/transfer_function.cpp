@@ -33,12 +33,16 @@ TransferFunction::TransferFunction(const ColorMap &map, float valueMin, float va
     const float tau = -std::log1p(-std::min(c.w, kMostOpaque));
     extinction_[i] = {tau * c.x, tau * c.y, tau * c.z, tau};
   }
-  extinctionIntegral_.assign(4 * n, 0.0);
+  // Summed in double, kept in float: the integrator reads differences over at least one entry.
+  extinctionIntegral_.assign(n, Vec4f{});
+  double sum[4] = {0.0, 0.0, 0.0, 0.0};
   for (size_t i = 1; i < n; ++i) {
     const Vec4f &a = extinction_[i - 1], &b = extinction_[i];
-    const double piece[4] = {0.5 * (a.x + b.x), 0.5 * (a.y + b.y), 0.5 * (a.z + b.z), 0.5 * (a.w + b.w)};
-    for (size_t k = 0; k < 4; ++k)
-      extinctionIntegral_[4 * i + k] = extinctionIntegral_[4 * (i - 1) + k] + piece[k];
+    sum[0] += 0.5 * (double(a.x) + b.x);
+    sum[1] += 0.5 * (double(a.y) + b.y);
+    sum[2] += 0.5 * (double(a.z) + b.z);
+    sum[3] += 0.5 * (double(a.w) + b.w);
+    extinctionIntegral_[i] = {float(sum[0]), float(sum[1]), float(sum[2]), float(sum[3])};
   }
   // Level k holds the maximum over 2^k entries from each position; positions past n - 2^k stay zero.
   const size_t levels = size_t(std::bit_width(n));

@@ -24,10 +24,10 @@ struct TransferFunctionView {
   int size = 0;
   float valueMin = 0.f;
   float scale = 0.f; ///< table entries per scalar unit
-  /// Per entry, (tau r, tau g, tau b, tau) with the extinction tau = -ln(1 - opacity); and 4 per entry,
-  /// their integrals from entry 0 over the table's linear pieces (for integrate).
+  /// Per entry, (tau r, tau g, tau b, tau) with the extinction tau = -ln(1 - opacity); and their integrals
+  /// from entry 0 over the table's linear pieces (for integrate).
   const Vec4f *extinction = nullptr;
-  const double *extinctionIntegral = nullptr;
+  const Vec4f *extinctionIntegral = nullptr;
 
   /// Colour and opacity (per opacity unit distance) at `value`, clamped to the range; NaN is transparent.
   UVR_HOST_DEVICE Vec4f sample(float value) const {
@@ -49,40 +49,37 @@ struct TransferFunctionView {
     b = b != b ? a : b;
     if (a != a)
       return {};
-    const double xa = double(a - valueMin) * double(scale), xb = double(b - valueMin) * double(scale);
-    const double span = xb - xa;
-    // Over a small fraction of an entry the function is as good as constant: its value at the middle.
-    if (!(fabs(span) > 1.0 / 64.0)) {
+    const float xa = (a - valueMin) * scale, xb = (b - valueMin) * scale;
+    const float span = xb - xa;
+    // Within one entry the table is linear: its value at the middle is as good, and the difference of the
+    // integrals below would lose digits.
+    if (!(fabsf(span) >= 1.f)) {
       const Vec4f c = sample(0.5f * (a + b));
       return {c.x, c.y, c.z, correctedOpacity(c.w, distance, unit)};
     }
-    double ia[4], ib[4];
-    integralTo(xa, ia);
-    integralTo(xb, ib);
-    const double depth = (ib[3] - ia[3]) / span; // mean extinction
-    if (!(depth > 0.0))
+    const Vec4f ia = integralTo(xa), ib = integralTo(xb);
+    const float depth = (ib.w - ia.w) / span; // mean extinction
+    if (!(depth > 0.f))
       return {};
-    const float opacity = 1.f - expf(-float(depth) * (distance / unit));
-    const double w = 1.0 / (ib[3] - ia[3]);
-    return {float((ib[0] - ia[0]) * w), float((ib[1] - ia[1]) * w), float((ib[2] - ia[2]) * w), opacity};
+    const float w = 1.f / (ib.w - ia.w);
+    return {(ib.x - ia.x) * w, (ib.y - ia.y) * w, (ib.z - ia.z) * w, 1.f - expf(-depth * (distance / unit))};
   }
 
 private:
-  /// The integrals of the extinction entries, (tau r, tau g, tau b, tau), from entry 0 to table position x;
-  /// beyond the table the end entries' values hold, as sample clamps.
-  UVR_HOST_DEVICE void integralTo(double x, double out[4]) const {
+  /// The integrals of the extinction entries from entry 0 to table position x; beyond the table the end
+  /// entries' values hold, as sample clamps.
+  UVR_HOST_DEVICE Vec4f integralTo(float x) const {
     const int last = size - 1;
-    const double clamped = x < 0.0 ? 0.0 : (x > double(last) ? double(last) : x);
-    const int i = clamped >= double(last) ? last - 1 : int(clamped);
-    const double f = clamped - double(i);
-    const Vec4f lo = extinction[i], hi = extinction[i + 1];
-    const Vec4f outside = x < 0.0 ? extinction[0] : extinction[last];
-    const double beyond = x < 0.0 ? x : (x > double(last) ? x - double(last) : 0.0);
-    const float l[4] = {lo.x, lo.y, lo.z, lo.w}, h[4] = {hi.x, hi.y, hi.z, hi.w};
-    const float o[4] = {outside.x, outside.y, outside.z, outside.w};
-    for (int k = 0; k < 4; ++k) // exact for the linear piece between entries i and i + 1
-      out[k] = extinctionIntegral[4 * i + k] + f * double(l[k]) + 0.5 * f * f * double(h[k] - l[k]) +
-               beyond * double(o[k]);
+    const float clamped = clampf(x, 0.f, float(last));
+    const int i = clamped >= float(last) ? last - 1 : int(clamped);
+    const float f = clamped - float(i), g = 0.5f * f * f;
+    const Vec4f lo = extinction[i], hi = extinction[i + 1], base = extinctionIntegral[i];
+    const Vec4f outside = x < 0.f ? extinction[0] : extinction[last];
+    const float beyond = x - clamped;
+    // Exact for the linear piece between entries i and i + 1.
+    auto at = [&](float b, float l, float h, float o) { return b + f * l + g * (h - l) + beyond * o; };
+    return {at(base.x, lo.x, hi.x, outside.x), at(base.y, lo.y, hi.y, outside.y),
+            at(base.z, lo.z, hi.z, outside.z), at(base.w, lo.w, hi.w, outside.w)};
   }
 };
 
@@ -154,7 +151,7 @@ public:
   const std::vector<double> &prefixSquares() const { return prefixSquares_; }
   const std::vector<float> &opacityMaxima() const { return opacityMax_; }
   const std::vector<Vec4f> &extinction() const { return extinction_; }
-  const std::vector<double> &extinctionIntegral() const { return extinctionIntegral_; }
+  const std::vector<Vec4f> &extinctionIntegral() const { return extinctionIntegral_; }
 
   float maxOpacity(float a, float b) const { return rangeView().maxOpacity(a, b); }
   float colorVariance(float a, float b) const { return rangeView().colorVariance(a, b); }
@@ -165,7 +162,7 @@ private:
   std::vector<double> prefixSum_, prefixSquares_; ///< see TransferFunctionRangeView
   std::vector<float> opacityMax_;                 ///< levels of size() entries each, unused tails zero
   std::vector<Vec4f> extinction_;                 ///< see TransferFunctionView
-  std::vector<double> extinctionIntegral_;
+  std::vector<Vec4f> extinctionIntegral_;
 };
 
 /// nodeMinSigma's mark for a node with a transparent partition below.

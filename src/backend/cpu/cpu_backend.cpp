@@ -83,7 +83,9 @@ SampleTotals CpuBackend::render(const CameraView &camera, const IntegratorSettin
             // A ray that crosses no boundary face is done at once.
             const RayResult result =
                 along.none() ? RayResult{}
-                             : integrateRay<HostSampling>(scene, settings, ray, hint, along, trail);
+                : settings.preintegrate
+                    ? integrateRay<HostSampling, true>(scene, settings, ray, hint, along, trail)
+                    : integrateRay<HostSampling, false>(scene, settings, ray, hint, along, trail);
             ray = next;
             target.store(x, y, result);
             tileSamples.total += result.samples;

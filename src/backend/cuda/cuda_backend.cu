@@ -39,7 +39,7 @@ dim3 renderBlock(RenderMode mode, bool tiles) {
 /// docs/results/log.md.)
 constexpr int kMarchingBlocksPerSm = 5, kSkippingBlocksPerSm = 4;
 
-template <int BlocksPerSm>
+template <int BlocksPerSm, bool kPreintegrate>
 __global__ void __launch_bounds__(kRenderBlockThreads, BlocksPerSm)
     renderKernel(SceneView scene, IntegratorSettings settings, CameraView camera, PixelTarget target,
                  int height, const uint64_t *crossingStart, const uint64_t *crossingKeys,
@@ -53,7 +53,8 @@ __global__ void __launch_bounds__(kRenderBlockThreads, BlocksPerSm)
     if (crossingStart)
       crossings =
           pixelCrossings(crossingStart, crossingKeys, uint64_t(y) * uint64_t(target.width) + uint64_t(x));
-    const RayResult result = integrateRay<DeviceSampling>(scene, settings, camera.ray(x, y), hint, crossings);
+    const RayResult result =
+        integrateRay<DeviceSampling, kPreintegrate>(scene, settings, camera.ray(x, y), hint, crossings);
     target.store(x, y, result);
     taken = result.samples;
   }
@@ -114,9 +115,9 @@ struct CudaBackend::Impl {
   double buildMs = 0.0;
   std::vector<std::pair<std::string, double>> buildSteps;
   DeviceMetadata metadata;
-  DeviceBuffer<double> tfPrefixSum, tfPrefixSquares, tfExtinctionIntegral;
+  DeviceBuffer<double> tfPrefixSum, tfPrefixSquares;
   DeviceBuffer<float> tfOpacityMax;
-  DeviceBuffer<Vec4f> tfTable, tfExtinction;
+  DeviceBuffer<Vec4f> tfTable, tfExtinction, tfExtinctionIntegral;
   DeviceBuffer<uint8_t> rgb;
   DeviceBuffer<float> opacity;
   DeviceBuffer<uint32_t> samples;
@@ -230,7 +231,11 @@ SampleTotals CudaBackend::render(const CameraView &camera, const IntegratorSetti
   if (crossings)
     d.crossings.find(d.scene.mesh, d.accel.boundaryFaceList, camera, pixels);
   const uint64_t *crossingStart = crossings ? d.crossings.start() : nullptr;
-  const auto kernel = skipping ? renderKernel<kSkippingBlocksPerSm> : renderKernel<kMarchingBlocksPerSm>;
+  const auto kernel =
+      settings.preintegrate
+          ? (skipping ? renderKernel<kSkippingBlocksPerSm, true> : renderKernel<kMarchingBlocksPerSm, true>)
+          : (skipping ? renderKernel<kSkippingBlocksPerSm, false>
+                      : renderKernel<kMarchingBlocksPerSm, false>);
   UVR_CUDA_CHECK(cudaEventRecord(d.renderStart));
   kernel<<<grid, block>>>(d.scene, settings, camera, device, height, crossingStart, d.crossings.keys(),
                           d.sampleTotals.data());
