@@ -138,8 +138,8 @@ FrameSettings parseFrameSettings(const RenderOptions &o) {
     throw Error(std::string(e.what()) + " (--s1, --s2)");
   }
   if (!o.range.empty() && !(o.range[0] < o.range[1]))
-    throw Error("--range expects LO HI with LO below HI, got " + std::to_string(o.range[0]) + " " +
-                std::to_string(o.range[1]));
+    throw Error("--range expects LO HI with LO below HI, got " + CLI::detail::to_string(o.range[0]) + " " +
+                CLI::detail::to_string(o.range[1]));
   for (const std::string *v : {&o.eye, &o.at, &o.up})
     if (!v->empty())
       parseVector(*v, v == &o.eye ? "eye" : v == &o.at ? "at" : "up");

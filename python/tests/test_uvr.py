@@ -394,3 +394,35 @@ def test_input_errors():
     with pytest.raises(uvr.Error, match="time steps"):
         uvr.load(DISK, time_step=3)
     assert uvr.load(DISK, field="Temp").field_names == ["Temp"]
+
+
+def graded_ticks(n, length, first):
+    """n + 1 ticks from 0 to `length`, spacings growing geometrically from `first`."""
+    lo, hi = 1.0 + 1e-9, 2.0
+    for _ in range(100):
+        ratio = (lo + hi) / 2
+        lo, hi = (lo, ratio) if first * (ratio ** n - 1) / (ratio - 1) > length else (ratio, hi)
+    ticks = np.concatenate([[0.0], np.cumsum(first * ratio ** np.arange(n))])
+    return ticks * length / ticks[-1]
+
+
+def test_default_opacity_unit_follows_the_domain_not_the_finest_cells():
+    """A 20 m tunnel graded down to 1.6 cm at its walls: the default unit is ParaView's (diagonal / cbrt(cells)),
+    and the image shows more of the field than with a unit of the median cell (the earlier default)."""
+    xs, ys, zs = graded_ticks(24, 20.0, 0.016), graded_ticks(8, 4.0, 0.016), graded_ticks(8, 4.0, 0.016)
+    z, y, x = np.meshgrid(zs, ys, xs, indexing="ij")
+    points = np.stack([x.ravel(), y.ravel(), z.ravel()], axis=1)
+    nx, ny = len(xs), len(ys)
+    index = lambda i, j, k: (k * ny + j) * nx + i
+    cells = [[8, index(i, j, k), index(i + 1, j, k), index(i + 1, j + 1, k), index(i, j + 1, k), index(i, j, k + 1),
+              index(i + 1, j, k + 1), index(i + 1, j + 1, k + 1), index(i, j + 1, k + 1)]
+             for k in range(len(zs) - 1) for j in range(ny - 1) for i in range(nx - 1)]
+    mesh = uvr.Mesh(points, np.array(cells, dtype=np.int64).ravel(), np.full(len(cells), 12, dtype=np.uint8),
+                    point_data={"f": np.sin(points[:, 0] / 3) + points[:, 1] / 4})
+    renderer = uvr.Renderer(mesh)
+    image = renderer.render(size=(128, 128), camera={"view": "-y"})
+    stats = renderer.last_stats
+    assert stats["unit"] == pytest.approx(np.sqrt(20 ** 2 + 4 ** 2 + 4 ** 2) / len(cells) ** (1 / 3), rel=1e-5)
+    thin = renderer.render(size=(128, 128), camera={"view": "-y"}, unit=stats["s1"])
+    spread = lambda img: img[:, :, :3].astype(float).mean(axis=2)[img[:, :, 3] > 0].std()
+    assert spread(image) > 1.5 * spread(thin)

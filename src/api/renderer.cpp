@@ -107,6 +107,7 @@ void VolumeRenderer::render(const Camera &camera, const FrameSettings &settings,
   const FrameSettings s = defaults ? withDefaultSampling(settings, mesh.defaultStep(),
                                                          defaultUnitDistance(mesh.bounds(), mesh.cellCount()))
                                    : settings;
+  validateSettings(s); // a given s2 below the default s1, say so by name
   prepare(s.backend);
   RenderSettings internal;
   internal.integrator.mode = s.mode;
