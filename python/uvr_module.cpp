@@ -48,10 +48,39 @@ template <class T> py::array_t<T> viewArray(const T *data, std::vector<py::ssize
 }
 
 Vec3f toVec3(const py::handle &value, const char *what) {
-  const auto v = value.cast<std::vector<float>>();
+  std::vector<float> v;
+  try {
+    v = value.cast<std::vector<float>>();
+  } catch (const py::cast_error &) {
+    throw Error(std::string(what) + " expects 3 numbers");
+  }
   if (v.size() != 3)
     throw Error(std::string(what) + " expects 3 numbers");
   return {v[0], v[1], v[2]};
+}
+
+/// A keyword argument that is None (0: the default) or a finite number > 0; uvr.Error naming it otherwise.
+float optionalPositive(const py::handle &value, const char *name) {
+  if (value.is_none())
+    return 0.f;
+  double number = 0.0;
+  try {
+    number = value.cast<double>();
+  } catch (const py::cast_error &) {
+    throw Error(std::string(name) + " expects a number or None");
+  }
+  if (!(number > 0.0) || !std::isfinite(number) || !std::isfinite(float(number)))
+    throw Error(std::string(name) + " must be a finite number > 0 (None: the default); got " +
+                std::to_string(number));
+  return float(number);
+}
+
+/// A transfer-function range (lo, hi), checked where it is given rather than at the first frame.
+std::optional<std::pair<float, float>> checkRange(const std::optional<std::pair<float, float>> &range) {
+  if (range && !(range->first < range->second && std::isfinite(range->first) && std::isfinite(range->second)))
+    throw Error("range (" + std::to_string(range->first) + ", " + std::to_string(range->second) +
+                ") must be (lo, hi) with lo below hi, both finite");
+  return range;
 }
 
 py::tuple fromVec3(Vec3f v) { return py::make_tuple(v.x, v.y, v.z); }
@@ -229,7 +258,7 @@ PyTransferFunction transferFunctionFromArrays(const py::array &colorsObject,
                                   {row[0], row[1], full ? row[2] : 0.5f, full ? row[3] : 0.f});
     }
   }
-  tf.range = range;
+  tf.range = checkRange(range);
   return tf;
 }
 
@@ -237,32 +266,46 @@ PyTransferFunction transferFunctionFromArrays(const py::array &colorsObject,
 class PyRenderer {
 public:
   PyRenderer(std::shared_ptr<PyMesh> mesh, const std::optional<std::string> &field,
-             const std::string &backend, uint32_t leafSize)
+             const std::string &backend, int64_t leafSize)
       : mesh_(std::move(mesh)) {
     backendKind_ = parseBackendOption(backend);
+    if (leafSize < 0 || leafSize > int64_t(UINT32_MAX))
+      throw Error("leaf_size must be 0 (the default) or a positive cell count; got " +
+                  std::to_string(leafSize));
     const int fieldIndex = mesh_->mesh.chooseField(field.value_or(""));
     py::gil_scoped_release release;
-    renderer_ = std::make_unique<VolumeRenderer>(mesh_->mesh, fieldIndex, leafSize);
+    renderer_ = std::make_unique<VolumeRenderer>(mesh_->mesh, fieldIndex, uint32_t(leafSize));
+    // The acceleration data is built here, as users expect of the constructor, not at the first frame.
+    renderer_->prepare(backendKind_);
   }
 
-  Camera defaultCamera(float fovy, float aspect) const {
-    return frameBounds(mesh_->mesh.bounds(), fovy, aspect);
+  Camera defaultCamera(float fovy, float aspect, const std::string &view) const {
+    return frameBounds(mesh_->mesh.bounds(), view, fovy, aspect);
   }
 
   /// None: the default camera for an image of this aspect (width / height); a dict's keys (eye, at, up, fovy)
   /// replace those of the default camera.
   Camera toCamera(const py::object &object, float aspect) const {
     if (object.is_none())
-      return defaultCamera(30.f, aspect);
+      return defaultCamera(30.f, aspect, "+z");
     if (py::isinstance<Camera>(object))
       return object.cast<Camera>();
     const py::dict dict = object.cast<py::dict>();
     for (const auto &item : dict) {
       const std::string key = py::str(item.first);
-      if (key != "eye" && key != "at" && key != "up" && key != "fovy")
-        throw Error("unknown camera key '" + key + "': expected eye, at, up, fovy");
+      if (key != "eye" && key != "at" && key != "up" && key != "fovy" && key != "view")
+        throw Error("unknown camera key '" + key + "': expected eye, at, up, fovy, view");
     }
-    Camera camera = defaultCamera(dict.contains("fovy") ? dict["fovy"].cast<float>() : 30.f, aspect);
+    float fovy = 30.f;
+    if (dict.contains("fovy")) {
+      try {
+        fovy = dict["fovy"].cast<float>();
+      } catch (const py::cast_error &) {
+        throw Error("camera fovy expects a number of degrees");
+      }
+    }
+    const std::string view = dict.contains("view") ? std::string(py::str(dict["view"])) : "+z";
+    Camera camera = defaultCamera(fovy, aspect, view);
     if (dict.contains("at"))
       camera.at = toVec3(dict["at"], "at");
     if (dict.contains("eye"))
@@ -273,27 +316,37 @@ public:
   }
 
   py::array_t<uint8_t> render(const py::object &cameraObject, const std::optional<PyTransferFunction> &tf,
-                              const std::string &mode, std::optional<float> s1, std::optional<float> s2,
-                              std::optional<float> p, std::optional<float> unit, std::pair<int, int> size,
+                              const py::object &mode, const py::object &s1, const py::object &s2,
+                              const py::object &p, const py::object &unit, const py::object &size,
                               const py::object &background) {
-    const auto [width, height] = size;
-    if (width <= 0 || height <= 0 || width > 16384 || height > 16384)
+    // Every keyword is checked here, naming it, before any work (uvr.Error).
+    std::vector<int64_t> sides;
+    try {
+      sides = size.cast<std::vector<int64_t>>();
+    } catch (const py::cast_error &) {
+    }
+    if (sides.size() != 2 || sides[0] < 1 || sides[1] < 1 || sides[0] > 16384 || sides[1] > 16384)
       throw Error("size expects (width, height) with each side from 1 to 16384");
+    const int width = int(sides[0]), height = int(sides[1]);
+    if (!py::isinstance<py::str>(mode))
+      throw Error("mode expects reference, skip, adaptive or full");
     FrameSettings settings;
     settings.backend = backendKind_;
     settings.width = width;
     settings.height = height;
     settings.background = toVec3(background, "background");
-    settings.mode = parseMode(mode);
-    settings.s1 = s1.value_or(0.f);
-    settings.s2 = s2.value_or(0.f);
-    settings.p = p.value_or(0.f);
-    settings.unit = unit.value_or(0.f);
+    settings.mode = parseMode(mode.cast<std::string>());
+    settings.s1 = optionalPositive(s1, "s1");
+    settings.s2 = optionalPositive(s2, "s2");
+    settings.p = optionalPositive(p, "p");
+    settings.unit = optionalPositive(unit, "unit");
+    validateSettings(settings);
     const Camera camera = toCamera(cameraObject, float(width) / float(height));
-    checkCamera(camera);
+    validateCamera(camera);
     const PyTransferFunction function = tf ? *tf : PyTransferFunction{chooseColorMap(""), std::nullopt};
-    const ValueRange range = function.range ? ValueRange{function.range->first, function.range->second}
-                                            : mesh_->mesh.fieldRange(renderer_->fieldIndex());
+    const ValueRange range = function.range
+                                 ? ValueRange{function.range->first, function.range->second}
+                                 : defaultTransferRange(mesh_->mesh.fieldRange(renderer_->fieldIndex()));
 
     FrameResult frame;
     {
@@ -459,7 +512,7 @@ PYBIND11_MODULE(uvr, m) {
                                  "A colour and opacity preset stretched over a scalar range (ParaView's way)")
       .def(py::init([](const std::string &preset, const std::optional<std::string> &name,
                        const std::optional<std::pair<float, float>> &range) {
-             return PyTransferFunction{chooseColorMap(preset, name.value_or("")), range};
+             return PyTransferFunction{chooseColorMap(preset, name.value_or("")), checkRange(range)};
            }),
            py::arg("preset") = builtinColorMapNames().front(), py::arg("name") = py::none(),
            py::arg("range") = py::none(),
@@ -497,13 +550,15 @@ PYBIND11_MODULE(uvr, m) {
           py::arg("count") = 256, "r, g, b, opacity at `count` points evenly spaced over the preset");
 
   m.def("builtin_presets", &builtinColorMapNames, "Names of the built-in presets, the default first");
+  m.def("view_names", &cameraViewNames, "Names of the views default_camera and `uvr render --view` take");
 
   py::class_<PyRenderer>(m, "Renderer",
                          "Acceleration structures for one mesh and field, and frames drawn from them")
       .def(py::init<std::shared_ptr<PyMesh>, const std::optional<std::string> &, const std::string &,
-                    uint32_t>(),
+                    int64_t>(),
            py::arg("mesh"), py::arg("field") = py::none(), py::arg("backend") = "cpu",
-           py::arg("leaf_size") = kAutoLeafSize)
+           py::arg("leaf_size") = int64_t(kAutoLeafSize),
+           "Builds the acceleration data for the backend (the GIL released); leaf_size 0: the default")
       .def("render", &PyRenderer::render, py::arg("camera") = py::none(), py::arg("tf") = py::none(),
            py::arg("mode") = "full", py::arg("s1") = py::none(), py::arg("s2") = py::none(),
            py::arg("p") = py::none(), py::arg("unit") = py::none(),
@@ -512,8 +567,9 @@ PYBIND11_MODULE(uvr, m) {
            "Returns an (h, w, 4) uint8 array: RGB composited over the background, and accumulated opacity x "
            "255")
       .def("default_camera", &PyRenderer::defaultCamera, py::arg("fovy") = 30.f, py::arg("aspect") = 1.f,
-           "ParaView's reset camera for an image of this aspect (width / height), as `uvr render` uses by "
-           "default")
+           py::arg("view") = "+z",
+           "ParaView's reset camera for an image of this aspect (width / height) from the named view "
+           "(uvr.view_names(): +x, -x, +y, -y, +z, -z, iso), as `uvr render --view` frames it")
       .def_property_readonly("last_stats", &PyRenderer::lastStats)
       .def_property_readonly("last_samples", &PyRenderer::lastSamples, "(h, w) uint32 samples per pixel")
       .def("heatmap", &PyRenderer::heatmap,

@@ -238,6 +238,29 @@ TEST(Heatmap, ColourCodesAndDrawsTheScale) {
   }
 }
 
+TEST(Heatmap, TheBarsBlackEndIsFramedAndTheTitleSaysSamplesPerPixel) {
+  // All-zero counts but one: the image is the map's black end, where a black outline would vanish.
+  std::vector<uint32_t> samples(size_t(256) * 256, 0);
+  samples[0] = 100;
+  const Image image = heatmapImage(samples, 256, 256);
+  size_t grey = 0;
+  for (int y = 0; y < image.height; ++y)
+    for (int x = image.width / 2; x < image.width; ++x) {
+      const uint8_t *p = image.pixel(x, y);
+      grey += p[0] == 160 && p[1] == 160 && p[2] == 160;
+    }
+  EXPECT_GT(grey, size_t(2 * 128)) << "the bar's frame runs down both its sides";
+  // "samples per pixel" is three words wide: white text spans far more than "samples" (41 pixels) would.
+  int left = image.width;
+  for (int y = 0; y < 12; ++y)
+    for (int x = 0; x < image.width; ++x) {
+      const uint8_t *p = image.pixel(x, y);
+      if (p[0] == 255 && p[1] == 255 && p[2] == 255)
+        left = std::min(left, x);
+    }
+  EXPECT_LT(left, image.width - 4 - 1 - 90);
+}
+
 TEST(Heatmap, SmallImagesAreStillColourCoded) {
   const Image image = heatmapImage({0, 1, 2, 3, 4, 5, 6, 7, 8}, 3, 3);
   ASSERT_EQ(image.width, 3);

@@ -122,16 +122,39 @@ def main():
             outputs = [stem + ".vtu", stem + "_zlib.vtu"]
             run([uvr, "convert", source, outputs[0]])
             run([uvr, "convert", source, outputs[1], "--zlib"])
-            has_cell_fields = any(" cell " in key for key in expected)
-            if not has_cell_fields:  # .umesh holds point fields only
-                run([uvr, "convert", source, stem + ".umesh"])
-                outputs.append(stem + "_via_umesh.vtu")
-                run([uvr, "convert", stem + ".umesh", outputs[-1]])
-            else:  # refused, with the option that chooses point fields named
-                refused = subprocess.run([uvr, "convert", source, stem + ".umesh"], capture_output=True, text=True)
+            cell_fields = sorted({key.split(" cell ", 1)[1] for key in expected if " cell " in key})
+            point_fields = [key for key in expected if key.startswith("point ")]
+            umesh_expected = {k: v for k, v in expected.items() if " cell " not in k}
+            umesh = stem + ".umesh"
+            # .umesh holds point fields only: cell fields are dropped and named in one line; a mesh with no
+            # point field, or a cell field asked for by --field, is refused.
+            result = subprocess.run([uvr, "convert", source, umesh], capture_output=True, text=True)
+            if point_fields:
+                wrote = [line for line in result.stderr.splitlines() if line.startswith("uvr: wrote")]
+                if result.returncode != 0 or not wrote or f", {len(point_fields)} fields" not in wrote[0]:
+                    failures.append(f"{relative} -> .umesh: exit {result.returncode}, expected {len(point_fields)} "
+                                    f"fields written: {result.stderr.strip()}")
+                dropped = [line for line in result.stderr.splitlines() if "dropped cell field" in line]
+                if cell_fields and (len(dropped) != 1 or not all(f"'{n}'" in dropped[0] for n in cell_fields)):
+                    failures.append(f"{relative} -> .umesh: cell fields {cell_fields} not named in one line: "
+                                    f"{result.stderr.strip()}")
+                if not cell_fields and dropped:
+                    failures.append(f"{relative} -> .umesh: reports dropped fields it has not: {dropped}")
+                if result.returncode == 0:
+                    via = stem + "_via_umesh.vtu"
+                    run([uvr, "convert", umesh, via])
+                    compare(f"{relative} -> {os.path.basename(via)}", umesh_expected, describe(read_vtk(via)),
+                            failures)
+                    checked += 1
+            elif result.returncode != 2 or "cell field" not in result.stderr or os.path.exists(umesh):
+                failures.append(f"{relative} -> .umesh: expected a refusal (no point field), got "
+                                f"{result.returncode}: {result.stderr.strip()}")
+            if cell_fields:
+                refused = subprocess.run([uvr, "convert", source, umesh + "2.umesh", "--field", cell_fields[0]],
+                                         capture_output=True, text=True)
                 if refused.returncode != 2 or "is a cell field" not in refused.stderr or "--field" not in refused.stderr:
-                    failures.append(f"{relative} -> .umesh: expected a refusal naming --field, got "
-                                    f"{refused.returncode}: {refused.stderr.strip()}")
+                    failures.append(f"{relative} -> .umesh --field {cell_fields[0]}: expected a refusal naming "
+                                    f"--field, got {refused.returncode}: {refused.stderr.strip()}")
             for output in outputs:
                 compare(f"{relative} -> {os.path.basename(output)}", expected, describe(read_vtk(output)),
                         failures)

@@ -2,6 +2,13 @@
 
 #include <uvr/error.h>
 
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+
 namespace uvr {
 
 nlohmann::json frameStatsJson(const FrameStats &s) {
@@ -50,9 +57,49 @@ Backend parseBackendOption(const std::string &name) {
   return backend;
 }
 
-void checkCamera(const Camera &camera) {
-  if (length(cross(camera.at - camera.eye, camera.up)) == 0.f)
-    throw Error("--eye, --at and --up must not be collinear");
+namespace {
+
+/// A hidden name beside `path` that keeps its extension, which the writers choose the format by.
+std::string temporaryPath(const std::string &path) {
+  const std::filesystem::path p(path);
+  // Appended piece by piece: GCC 12 warns (-Wrestrict, falsely) about "." + std::string&&.
+  std::string name(1, '.');
+  name += p.stem().string();
+  name += ".uvr-tmp-";
+  name += std::to_string(::getpid());
+  name += p.extension().string();
+  return (p.parent_path() / name).string();
+}
+
+} // namespace
+
+void checkOutputPath(const std::string &path, const std::string &option) {
+  if (path.empty())
+    throw Error(option + " needs a file name");
+  std::error_code error;
+  if (std::filesystem::is_directory(path, error))
+    throw Error(path, "", option + " names a folder, not a file");
+  const std::string probe = temporaryPath(path);
+  std::FILE *file = std::fopen(probe.c_str(), "wb");
+  if (!file)
+    throw Error(path, "", "cannot write " + option + ": " + std::strerror(errno));
+  std::fclose(file);
+  std::remove(probe.c_str());
+}
+
+void writeWhole(const std::string &path, const std::function<void(const std::string &)> &write) {
+  const std::string temporary = temporaryPath(path);
+  try {
+    write(temporary);
+  } catch (...) {
+    std::remove(temporary.c_str());
+    throw;
+  }
+  if (std::rename(temporary.c_str(), path.c_str()) != 0) {
+    const int error = errno;
+    std::remove(temporary.c_str());
+    throw Error(path, "", std::string("cannot write: ") + std::strerror(error));
+  }
 }
 
 } // namespace uvr

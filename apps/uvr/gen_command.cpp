@@ -1,4 +1,7 @@
 #include "commands.h"
+#include "option_checks.h"
+
+#include "front_end.h"
 
 #include <uvr/error.h>
 #include <uvr/gen.h>
@@ -53,6 +56,7 @@ VoxelVolume readVolume(const GenCommandOptions &o) {
 void runGen(const GenCommandOptions &o) {
   if (!o.output.ends_with(".umesh") && !o.output.ends_with(".vtu"))
     throw Error(o.output, "", "expected an output file ending in .umesh or .vtu");
+  checkOutputPath(o.output, "-o");
   Timer loadTimer;
   const VoxelVolume volume = readVolume(o);
   const double loadMs = loadTimer.milliseconds();
@@ -69,7 +73,7 @@ void runGen(const GenCommandOptions &o) {
       volume.generateMesh(options, o.cellType == "hex" ? CellType::Hexahedron : CellType::Tetra);
   const double genMs = genTimer.milliseconds();
   Timer saveTimer;
-  mesh.save(o.output);
+  writeWhole(o.output, [&](const std::string &temporary) { mesh.save(temporary); });
   const double saveMs = saveTimer.milliseconds();
 
   std::fprintf(stderr,
@@ -95,17 +99,22 @@ void addGenCommand(CLI::App &app) {
   cmd->add_option("--cells", options->cells, "Target cell count (met within 10 %)")
       ->check(CLI::Range(uint64_t(1000), uint64_t(4000000000ull)));
   cmd->add_option("--threshold", options->threshold,
-                  "Keep cells whose centroid value is >= this (default: Otsu's threshold of the volume)");
+                  "Keep cells whose centroid value is >= this (default: Otsu's threshold of the volume)")
+      ->check(finiteNumber());
   cmd->add_option("--cell-type", options->cellType, "tet (default) or hex")
       ->check(CLI::IsMember({"tet", "hex"}));
-  cmd->add_option("--seed", options->seed, "Seed of the vertex jitter (default 0)");
+  cmd->add_option("--seed", options->seed, "Seed of the vertex jitter (default 0)")->check(integerAtLeast(0));
   cmd->add_flag("--cell-field", options->cellField,
                 "Also store the value at each cell's centroid as '<name>_cell' (.vtu only)");
-  cmd->add_option("--dims", options->dims, "Raw volume: voxels per axis X,Y,Z")->delimiter(',')->expected(3);
+  cmd->add_option("--dims", options->dims, "Raw volume: voxels per axis X,Y,Z")
+      ->delimiter(',')
+      ->expected(3)
+      ->check(integerAtLeast(1));
   cmd->add_option("--type", options->type, "Raw volume: uint8, int16, uint16 or float32 (little-endian)");
   cmd->add_option("--spacing", options->spacing, "Raw volume: voxel spacing X,Y,Z (default 1,1,1)")
       ->delimiter(',')
-      ->expected(3);
+      ->expected(3)
+      ->check(positiveNumber());
   cmd->add_option("-o,--output", options->output, "Mesh file to write (.umesh, .vtu)")->required();
   cmd->callback([options] { runGen(*options); });
 }

@@ -1,4 +1,5 @@
 #include "commands.h"
+#include "option_checks.h"
 
 #include <uvr/io.h>
 #include <uvr/mesh.h>
@@ -120,6 +121,7 @@ void addInfoCommand(CLI::App &app) {
   cmd->add_flag("--json", options->json, "Print JSON");
   cmd->add_option("--time-step", options->timeStep,
                   "Time step of a series, an Exodus file or a Gmsh file's data, from 0")
+      ->check(integerAtLeast(0))
       ->capture_default_str();
   cmd->callback([options] { runInfo(*options); });
 }

@@ -18,7 +18,11 @@ int main(int argc, char **argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError &e) {
-    return app.exit(e);
+    // --help and --version succeed as CLI11 has them; every other command-line error is an input error.
+    if (e.get_exit_code() == static_cast<int>(CLI::ExitCodes::Success))
+      return app.exit(e);
+    std::fprintf(stderr, "uvr: error: %s (uvr COMMAND --help lists the options)\n", e.what());
+    return 2;
   } catch (const uvr::Error &e) {
     std::fprintf(stderr, "uvr: error: %s\n", e.what());
     return 2;

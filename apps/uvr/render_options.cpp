@@ -1,10 +1,14 @@
 #include "render_options.h"
 
 #include "front_end.h"
+#include "option_checks.h"
 
+#include <uvr/color_map.h>
 #include <uvr/error.h>
+#include <uvr/renderer.h>
 #include <uvr/system.h>
 
+#include <cmath>
 #include <cstdio>
 #include <sstream>
 
@@ -16,8 +20,9 @@ Vec3f parseVector(const std::string &text, const std::string &option) {
   Vec3f v;
   char c1 = 0, c2 = 0;
   std::istringstream in(text);
-  if (!(in >> v.x >> c1 >> v.y >> c2 >> v.z) || c1 != ',' || c2 != ',' || !in.eof())
-    throw Error("--" + option + " expects X,Y,Z, got '" + text + "'");
+  if (!(in >> v.x >> c1 >> v.y >> c2 >> v.z) || c1 != ',' || c2 != ',' || !in.eof() || !std::isfinite(v.x) ||
+      !std::isfinite(v.y) || !std::isfinite(v.z))
+    throw Error("--" + option + " expects three finite numbers X,Y,Z, got '" + text + "'");
   return v;
 }
 
@@ -31,18 +36,35 @@ void parseSize(const std::string &text, int &width, int &height) {
 
 } // namespace
 
+std::string builtinNames() {
+  std::string names;
+  for (const std::string &name : builtinColorMapNames())
+    names += (names.empty() ? "" : ", ") + name;
+  return names;
+}
+
+std::string viewNames() {
+  std::string names;
+  for (const std::string &name : cameraViewNames())
+    names += (names.empty() ? "" : "|") + name;
+  return names;
+}
+
 void addRenderOptions(CLI::App *cmd, RenderOptions &o) {
   cmd->add_option("MESH", o.mesh,
                   "Mesh file (.vtu, .vtk, .msh, .e, .ex2, .exo, .g, .umesh; a .pvd series or numbered files "
                   "such as data_%d.vtu)")
       ->required();
   cmd->add_option("--time-step", o.timeStep, "Time step of a file that has several, from 0")
+      ->check(integerAtLeast(0))
       ->capture_default_str();
   cmd->add_option("--field", o.field, "Scalar field to render (default: the first)");
-  cmd->add_option("--tf", o.tf, "Transfer function: a ParaView preset JSON file or a built-in name");
+  cmd->add_option("--tf", o.tf,
+                  "Transfer function: a ParaView preset JSON file or a built-in name: " + builtinNames());
   cmd->add_option("--tf-name", o.tfName, "Preset to take from the --tf file (default: the first)");
-  cmd->add_option("--range", o.range, "Scalar range the transfer function spans (default: the field's)")
-      ->expected(2);
+  cmd->add_option("--range", o.range, "Scalar range LO HI the transfer function spans (default: the field's)")
+      ->expected(2)
+      ->check(finiteNumber());
   cmd->add_option("--mode", o.mode, "reference | skip | adaptive | full")
       ->check(CLI::IsMember({"reference", "skip", "adaptive", "full"}))
       ->capture_default_str();
@@ -54,18 +76,30 @@ void addRenderOptions(CLI::App *cmd, RenderOptions &o) {
                   "global | local | auto (local in full: each partition's steps scaled to its cells' size)")
       ->check(CLI::IsMember({"auto", "global", "local"}))
       ->capture_default_str();
-  cmd->add_option("--s1", o.s1, "Smallest (and fixed) step (default: cube root of the median cell volume)");
-  cmd->add_option("--s2", o.s2, "Largest adaptive step (default: 8 * the default s1)");
-  cmd->add_option("--p", o.p, "Adaptive power, >= 1 (default: 4)");
-  cmd->add_option("--unit", o.unit, "Opacity unit distance (default: the default s1)");
+  cmd->add_option("--s1", o.s1, "Smallest (and fixed) step (default: cube root of the median cell volume)")
+      ->check(positiveNumber());
+  cmd->add_option("--s2", o.s2, "Largest adaptive step, >= s1 (default: 8 * the default s1)")
+      ->check(positiveNumber());
+  cmd->add_option("--p", o.p, "Adaptive power, >= 1 (default: 4)")->check(atLeast(1.0, "1"));
+  cmd->add_option("--unit", o.unit,
+                  "Opacity unit distance (default: the bounds' diagonal / cube root of the cell count)")
+      ->check(positiveNumber());
   cmd->add_option("--leaf-size", o.leafSize,
-                  "Most cells per partition (default: the cell count / 256, at least 64)");
+                  "Most cells per partition (default: the cell count / 256, at least 64)")
+      ->check(integerAtLeast(1));
   cmd->add_option("--size", o.size, "Image size WxH")->capture_default_str();
-  cmd->add_option("--eye", o.eye, "Camera position X,Y,Z (default: framing the mesh from +z)");
+  cmd->add_option("--view", o.view,
+                  "Side the camera looks from, framing the mesh as ParaView's reset camera: " + viewNames() +
+                      " (default: +z)")
+      ->check(CLI::IsMember(cameraViewNames()));
+  cmd->add_option("--eye", o.eye, "Camera position X,Y,Z (default: framing the mesh from --view)");
   cmd->add_option("--at", o.at, "Focal point X,Y,Z (default: the centre of the mesh bounds)");
-  cmd->add_option("--up", o.up, "View-up direction X,Y,Z (default: 0,1,0)");
-  cmd->add_option("--fovy", o.fovy, "Vertical view angle in degrees")->capture_default_str();
-  cmd->add_option("--background", o.background, "Background colour R,G,B in [0, 1]")->capture_default_str();
+  cmd->add_option("--up", o.up, "View-up direction X,Y,Z (default: 0,1,0; 0,0,1 for the x and y views)");
+  cmd->add_option("--fovy", o.fovy, "Vertical view angle in degrees, between 0 and 180")
+      ->check(numberCheck("a number of degrees between 0 and 180", [](double v) { return v > 0 && v < 180; }))
+      ->capture_default_str();
+  cmd->add_option("--background", o.background, "Background colour R,G,B, each in [0, 1]")
+      ->capture_default_str();
   cmd->add_option("--backend", o.backend, "cpu or cuda")->capture_default_str();
 }
 
@@ -80,15 +114,27 @@ LoadedMesh loadForRendering(const RenderOptions &o) {
   if (skipped > 0)
     std::fprintf(stderr, "uvr: %s: skipped %llu lower-dimensional cells\n", o.mesh.c_str(),
                  static_cast<unsigned long long>(skipped));
-  loaded.fieldIndex = loaded.mesh.chooseField(o.field);
+  try {
+    loaded.fieldIndex = loaded.mesh.chooseField(o.field);
+  } catch (const Error &e) {
+    throw Error(std::string(e.what()) + (o.field.empty() ? "" : " (--field)"));
+  }
   return loaded;
 }
 
 FrameSettings parseFrameSettings(const RenderOptions &o) {
   FrameSettings settings;
   parseSize(o.size, settings.width, settings.height);
-  settings.backend = parseBackendOption(o.backend);
+  try {
+    settings.backend = parseBackendOption(o.backend);
+  } catch (const Error &e) {
+    const std::string what = e.what();
+    throw Error(what.find("--backend") == std::string::npos ? what + " (--backend)" : what);
+  }
   settings.background = parseVector(o.background, "background");
+  for (const float c : {settings.background.x, settings.background.y, settings.background.z})
+    if (!(c >= 0.f && c <= 1.f))
+      throw Error("--background expects R,G,B each in [0, 1], got '" + o.background + "'");
   settings.mode = parseMode(o.mode);
   settings.compositing = parseCompositing(o.compositing);
   settings.steps = parseStepSizing(o.steps);
@@ -96,24 +142,56 @@ FrameSettings parseFrameSettings(const RenderOptions &o) {
   settings.s2 = o.s2;
   settings.p = o.p;
   settings.unit = o.unit;
+  try {
+    validateSettings(settings); // what the validators above leave: s2 below s1
+  } catch (const Error &e) {
+    throw Error(std::string(e.what()) + " (--s1, --s2)");
+  }
+  if (!o.range.empty() && !(o.range[0] < o.range[1]))
+    throw Error("--range expects LO HI with LO below HI, got " + CLI::detail::to_string(o.range[0]) + " " +
+                CLI::detail::to_string(o.range[1]));
+  for (const std::string *v : {&o.eye, &o.at, &o.up})
+    if (!v->empty())
+      parseVector(*v, v == &o.eye ? "eye" : v == &o.at ? "at" : "up");
   return settings;
 }
 
+ColorMap chooseTransferFunction(const RenderOptions &o) {
+  try {
+    return chooseColorMap(o.tf, o.tfName);
+  } catch (const Error &e) {
+    throw Error(std::string(e.what()) + (o.tfName.empty() ? " (--tf)" : " (--tf, --tf-name)"));
+  }
+}
+
 ValueRange transferRange(const RenderOptions &o, const VolumeMesh &mesh, int fieldIndex) {
-  return o.range.empty() ? mesh.fieldRange(fieldIndex) : ValueRange{o.range[0], o.range[1]};
+  if (!o.range.empty())
+    return {o.range[0], o.range[1]};
+  const ValueRange data = mesh.fieldRange(fieldIndex);
+  const ValueRange range = defaultTransferRange(data);
+  if (!(data.min < data.max))
+    std::fprintf(stderr,
+                 "uvr: field '%s' is constant (%g): the transfer function spans [%g, %g]; set --range\n",
+                 mesh.field(fieldIndex).name.c_str(), double(data.min), double(range.min), double(range.max));
+  return range;
 }
 
 Camera chooseCamera(const RenderOptions &o, const VolumeMesh &mesh) {
   int width, height;
   parseSize(o.size, width, height);
-  Camera camera = frameBounds(mesh.bounds(), o.fovy, float(width) / float(height));
+  Camera camera =
+      frameBounds(mesh.bounds(), o.view.empty() ? "+z" : o.view, o.fovy, float(width) / float(height));
   if (!o.at.empty())
     camera.at = parseVector(o.at, "at");
   if (!o.eye.empty())
     camera.eye = parseVector(o.eye, "eye");
   if (!o.up.empty())
     camera.up = parseVector(o.up, "up");
-  checkCamera(camera);
+  try {
+    validateCamera(camera);
+  } catch (const Error &e) {
+    throw Error(std::string(e.what()) + " (--view, --eye, --at, --up, --fovy)");
+  }
   return camera;
 }
 

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <uvr/camera.h>
+#include <uvr/color_map.h>
 #include <uvr/mesh.h>
 #include <uvr/settings.h>
 
@@ -26,6 +27,7 @@ struct RenderOptions {
   uint32_t leafSize = kAutoLeafSize;
   std::string size = "1024x1024";
   std::string eye, at, up;
+  std::string view; ///< a named view (cameraViewNames); empty: +z, the reset camera
   float fovy = 30.f;
   std::string background = "0,0,0";
   std::string backend = "cpu";
@@ -43,13 +45,17 @@ struct LoadedMesh {
 LoadedMesh loadForRendering(const RenderOptions &options);
 
 /// Image size, background, backend, mode and sampling (0 for s1, s2, p and unit: the mesh's defaults),
-/// checked before the mesh is loaded.
+/// checked before the mesh is loaded, with the camera's options and --range (errors name the option).
 FrameSettings parseFrameSettings(const RenderOptions &options);
 
-/// The --range, or the range of the mesh's field `fieldIndex`.
+/// The preset --tf and --tf-name choose (errors name the options).
+ColorMap chooseTransferFunction(const RenderOptions &options);
+
+/// The --range, or the default range of the mesh's field `fieldIndex` (defaultTransferRange; a constant
+/// field is reported on stderr).
 ValueRange transferRange(const RenderOptions &options, const VolumeMesh &mesh, int fieldIndex);
 
-/// ParaView's reset camera for the mesh, with --eye, --at, --up and --fovy applied.
+/// ParaView's reset camera for the mesh from --view, with --eye, --at, --up and --fovy applied.
 Camera chooseCamera(const RenderOptions &options, const VolumeMesh &mesh);
 
 } // namespace uvr

@@ -1,6 +1,8 @@
 #include "commands.h"
 #include "render_options.h"
 
+#include "front_end.h"
+
 #include <uvr/color_map.h>
 #include <uvr/error.h>
 
@@ -22,8 +24,16 @@ struct ViewCommandOptions {
 };
 
 void runView(const ViewCommandOptions &o) {
-#ifdef UVR_HAS_VIEWER
   const FrameSettings settings = parseFrameSettings(o.view);
+  const ColorMap colorMap = chooseTransferFunction(o.view);
+  if (!o.script.empty()) {
+    std::error_code error;
+    if (!std::filesystem::is_regular_file(o.script, error))
+      throw Error(o.script, "", "--script: no such file");
+  }
+  if (!o.screenshot.empty())
+    checkOutputPath(o.screenshot + "-check.png", "--screenshot");
+#ifdef UVR_HAS_VIEWER
   const LoadedMesh loaded = loadForRendering(o.view);
 
   ViewerSetup setup;
@@ -32,9 +42,10 @@ void runView(const ViewCommandOptions &o) {
   setup.fieldIndex = loaded.fieldIndex;
   setup.leafSize = o.view.leafSize;
   setup.defaultStep = loaded.mesh.defaultStep();
+  setup.defaultUnit = defaultUnitDistance(loaded.mesh.bounds(), loaded.mesh.cellCount());
   setup.camera = chooseCamera(o.view, loaded.mesh);
-  setup.settings = withDefaultSampling(settings, setup.defaultStep);
-  setup.colorMap = chooseColorMap(o.view.tf, o.view.tfName);
+  setup.settings = withDefaultSampling(settings, setup.defaultStep, setup.defaultUnit);
+  setup.colorMap = colorMap;
   if (!o.view.tf.empty() && std::filesystem::exists(o.view.tf))
     setup.presets = readColorMapPresets(o.view.tf);
   setup.range = transferRange(o.view, loaded.mesh, loaded.fieldIndex);
@@ -42,7 +53,8 @@ void runView(const ViewCommandOptions &o) {
   setup.screenshotPrefix = o.screenshot;
   runViewer(setup);
 #else
-  (void)o;
+  (void)settings;
+  (void)colorMap;
   throw Error("this build of uvr has no viewer: it needs GLFW, OpenGL and Dear ImGui at build time "
               "(Debian: libglfw3-dev libimgui-dev)");
 #endif

@@ -23,7 +23,7 @@ const std::map<std::string, Signature> kCommands = {
     {"orbit", {2, true}},       {"pan", {2, true}},   {"zoom", {1, true}},     {"reset-camera", {0, false}},
     {"mode", {1, false}},       {"s1", {1, true}},    {"s2", {1, true}},       {"p", {1, true}},
     {"preset", {-1, false}},    {"range", {2, true}}, {"opacity", {-2, true}}, {"heatmap", {1, false}},
-    {"screenshot", {1, false}},
+    {"screenshot", {1, false}}, {"view", {1, false}},
 };
 
 } // namespace

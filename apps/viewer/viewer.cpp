@@ -155,7 +155,7 @@ private:
     state.settings.s1 = controls_.s1;
     state.settings.s2 = controls_.s2;
     state.settings.p = controls_.p;
-    state.settings = withDefaultSampling(state.settings, setup_.defaultStep);
+    state.settings = withDefaultSampling(state.settings, setup_.defaultStep, setup_.defaultUnit);
     return state;
   }
 
@@ -256,11 +256,12 @@ private:
     } else if (!shown_.stats.is_null()) {
       const nlohmann::json &s = shown_.stats;
       ImGui::Text("Frame: %.0f ms at %dx%d (%s)", s["render_ms"].get<double>(), s["width"].get<int>(),
-                  s["height"].get<int>(), shown_.scale == 1 ? "full" : "preview 1/4");
+                  s["height"].get<int>(), shown_.scale == 1 ? "full resolution" : "preview, 1/4");
       ImGui::Text("Samples/pixel: %.1f mean, %u max", s["samples_per_pixel_mean"].get<double>(),
                   s["samples_per_pixel_max"].get<unsigned>());
       ImGui::Text("Partitions skipped: %u of %u", s["partitions_skipped"].get<unsigned>(),
                   s["partitions"].get<unsigned>());
+      // tf_update_ms as everywhere: the update this frame waited for, 0 when the function is unchanged.
       ImGui::Text("TF update: %.2f ms, UI: %.0f fps", s["tf_update_ms"].get<double>(),
                   double(ImGui::GetIO().Framerate));
     }
@@ -297,6 +298,13 @@ private:
     ImGui::SameLine();
     if (ImGui::Button("Reset camera"))
       controls_.camera = setup_.camera;
+    // ParaView's view-direction buttons: the side the camera looks from, framed as the reset camera.
+    ImGui::Text("View from");
+    for (const std::string &name : cameraViewNames()) {
+      ImGui::SameLine();
+      if (ImGui::Button(name.c_str()))
+        controls_.camera = viewCamera(name);
+    }
     ImGui::Separator();
 
     // Transfer function.
@@ -383,6 +391,13 @@ private:
     }
   }
 
+  /// The named view of the mesh for the image region's aspect, at the current vertical view angle.
+  Camera viewCamera(const std::string &name) const {
+    int width, height;
+    regionSize(width, height);
+    return frameBounds(setup_.mesh.bounds(), name, controls_.camera.fovy, float(width) / float(height));
+  }
+
   /// Applies script commands up to the next screenshot; returns true when this frame is to be captured.
   bool stepScript() {
     if (waitingForScreenshot_) {
@@ -405,6 +420,8 @@ private:
         controls_.camera = zoom(controls_.camera, n[0]);
       else if (c.name == "reset-camera")
         controls_.camera = setup_.camera;
+      else if (c.name == "view")
+        controls_.camera = viewCamera(c.words[0]);
       else if (c.name == "mode")
         controls_.mode = parseMode(c.words[0]);
       else if (c.name == "s1" || c.name == "s2" || c.name == "p") {

@@ -18,6 +18,7 @@ struct ViewerSetup {
   int fieldIndex = 0;
   uint32_t leafSize = kAutoLeafSize;
   float defaultStep = 1.f;       ///< VolumeMesh::defaultStep: what s1 = 0 etc. mean
+  float defaultUnit = 1.f;       ///< defaultUnitDistance: what unit = 0 means
   Camera camera;                 ///< the starting camera
   FrameSettings settings;        ///< size of the image region, background, sampling (defaults filled in)
   ColorMap colorMap;             ///< the starting preset

@@ -4,6 +4,8 @@
 #include <uvr/vec.h>
 
 #include <cmath>
+#include <string>
+#include <vector>
 
 namespace uvr {
 
@@ -31,5 +33,19 @@ inline Camera frameBounds(const Box3f &bounds, float fovy = 30.f, float aspect =
   camera.fovy = fovy;
   return camera;
 }
+
+/// The named views, as ParaView's view-direction buttons have them: the side the camera looks from
+/// (+x, -x, +y, -y, +z, -z) or `iso` (from +x+y+z). +z (looking down -z, +y up) is the reset camera.
+std::vector<std::string> cameraViewNames();
+
+/// ParaView's reset camera for `bounds` seen from the named view (cameraViewNames): view-up +z for the x and
+/// y views, +y for the others. Throws uvr::Error listing the names for an unknown one, or for a bad fovy or
+/// aspect (validateCamera's checks).
+Camera frameBounds(const Box3f &bounds, const std::string &view, float fovy = 30.f, float aspect = 1.f);
+
+/// Throws uvr::Error for a camera no image can be made with: a vertical view angle not in (0, 180) degrees,
+/// a non-finite eye, focal point or view-up, eye == focal point, a zero view-up or one parallel to the view
+/// direction. The message names the field (fovy, eye, at, up). VolumeRenderer::render checks every camera.
+void validateCamera(const Camera &camera);
 
 } // namespace uvr

@@ -30,7 +30,7 @@ struct FrameStats {
   double samplesPerPixelMean = 0.0;
   uint32_t samplesPerPixelMax = 0;
   double buildMs = 0.0;    ///< the acceleration build for the backend used
-  double tfUpdateMs = 0.0; ///< the last transfer-function change
+  double tfUpdateMs = 0.0; ///< the transfer-function update since the previous frame; 0 when unchanged
   double renderMs = 0.0;   ///< this frame, wall clock
   float s1 = 0.f, s2 = 0.f, p = 0.f, unit = 0.f;
   uint32_t leafSize = 0;
@@ -57,6 +57,11 @@ struct FrameResult {
 /// adjacency, point-location hierarchy, occupancy and seed grids, and the partitions whose per-partition
 /// opacity and colour variance each transfer-function change recomputes (in time independent of the cell
 /// count). Not thread-safe: use one from one thread at a time.
+/// The range a transfer function spans over a field of range `fieldRange` by default: that range, or for a
+/// constant field (min == max, or no finite values: {0, 0}) one of width max(1, |value| / 1000) centred on
+/// the value, so that the field shows in the preset's middle colour rather than at its transparent end.
+ValueRange defaultTransferRange(ValueRange fieldRange);
+
 class VolumeRenderer {
 public:
   /// Renders field `fieldIndex` of `mesh` (see VolumeMesh::chooseField) in partitions of at most `leafSize`
@@ -73,7 +78,8 @@ public:
 
   /// Colours and opacities of `map` stretched over `range` of the field's values (ParaView's way); needed
   /// before the first frame. Recomputes the partitions' metadata only, on the GPU once CUDA is prepared;
-  /// the same function and range again change nothing.
+  /// the same function and range again change nothing. Throws uvr::Error unless range.min < range.max, both
+  /// finite (defaultTransferRange widens a constant field's range).
   void setTransferFunction(const ColorMap &map, ValueRange range);
 
   /// Builds what `backend` needs ahead of the first frame, so that frame times exclude it: the acceleration
@@ -81,8 +87,10 @@ public:
   /// the backend is not in this build or no GPU is found.
   void prepare(Backend backend);
 
-  /// Draws a frame: one ray per pixel through its centre. Throws uvr::Error for invalid sampling settings
-  /// or size, a camera whose view direction and view-up are collinear, or no transfer function yet.
+  /// Draws a frame: one ray per pixel through its centre. Throws uvr::Error for invalid settings
+  /// (validateSettings), a degenerate camera (validateCamera), or no transfer function yet. Prepares the
+  /// backend where it is not. The frame's tfUpdateMs is the transfer-function update since the last frame
+  /// (0 when unchanged); buildMs is the backend's acceleration build, whenever it was done.
   FrameResult render(const Camera &camera, const FrameSettings &settings);
   /// The same into `frame`, whose buffers are reused when their size matches (no allocation per frame).
   void render(const Camera &camera, const FrameSettings &settings, FrameResult &frame);

@@ -71,7 +71,7 @@ struct FrameSettings {
   float s1 = 0.f;   ///< smallest (and the fixed) step; default: the mesh's default step
   float s2 = 0.f;   ///< largest adaptive step; default: 8 x the default step, at least s1
   float p = 0.f;    ///< adaptive power, >= 1; default 4
-  float unit = 0.f; ///< opacity unit distance; default: the default step
+  float unit = 0.f; ///< opacity unit distance; default: defaultUnitDistance of the mesh
   Compositing compositing = Compositing::Auto;
   StepSizing steps = StepSizing::Auto;
   int width = 1024;
@@ -85,5 +85,18 @@ struct FrameSettings {
 /// `settings` with its defaults filled in (0 for s1, s2, p or unit) for a mesh of default step `defaultStep`
 /// (VolumeMesh::defaultStep): s1 and unit = defaultStep, s2 = 8 x defaultStep (at least s1), p = 4.
 FrameSettings withDefaultSampling(FrameSettings settings, float defaultStep);
+/// The same with the opacity unit distance `defaultUnit` (defaultUnitDistance) for a unit of 0: what
+/// VolumeRenderer::render uses.
+FrameSettings withDefaultSampling(FrameSettings settings, float defaultStep, float defaultUnit);
+
+/// The default opacity unit distance of a mesh, as ParaView derives it from the data set: the length of the
+/// bounds' diagonal over the cube root of the cell count (the edge of a mean cell of a cube-shaped mesh), so
+/// that the opacity of a preset does not depend on how finely a region is meshed; 1 for an empty mesh.
+float defaultUnitDistance(const Box3f &bounds, uint64_t cells);
+
+/// Throws uvr::Error for settings no frame can be drawn with: a negative or non-finite s1, s2, p or unit (0
+/// asks for the default), s2 < s1 or p < 1 where both are given, a size outside 1..16384, or a background
+/// outside [0, 1]. The message names the setting.
+void validateSettings(const FrameSettings &settings);
 
 } // namespace uvr

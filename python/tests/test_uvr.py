@@ -7,6 +7,7 @@ import json
 import os
 import subprocess
 import threading
+import time
 
 import numpy as np
 import pytest
@@ -244,11 +245,119 @@ def test_render_releases_the_gil():
      lambda: uvr.Renderer(uvr.load(DISK)).render(s1=1, s2=0.5, size=(8, 8))),
 ])
 def test_errors_carry_the_command_messages(tmp_path, cli_args, call):
+    """The library's message, which the command follows with the options it concerns."""
     os.chdir(tmp_path)
     message = cli_error(*cli_args)
     with pytest.raises(uvr.Error) as error:
         call()
-    assert str(error.value) == message
+    assert message == str(error.value) or message.startswith(str(error.value) + " (--"), message
+
+
+BAD_NUMBERS = [0, -1, float("nan"), float("inf"), "abc", [1, 2]]
+
+
+@pytest.mark.parametrize("keyword, values", [
+    ("s1", BAD_NUMBERS), ("s2", BAD_NUMBERS), ("unit", BAD_NUMBERS), ("p", BAD_NUMBERS + [0.5]),
+    ("size", [(0, 8), (-1, 8), (8, 0), (20000, 8), (8,), "abc", (float("nan"), 8), None]),
+    ("background", [(255, 255, 255), (-1, 0, 0), (float("nan"), 0, 0), (float("inf"), 0, 0), (1, 2), "abc"]),
+    ("mode", ["bogus", 3, None]),
+    ("camera", [{"fovy": 0}, {"fovy": 180}, {"fovy": 200}, {"fovy": float("nan")}, {"fovy": "abc"},
+                {"eye": (0, 0, 0), "at": (0, 0, 0)}, {"eye": (float("nan"), 0, 0)}, {"at": (float("inf"), 0, 0)},
+                {"up": (0, 0, 1)}, {"up": (0, 0, 0)}, {"up": (float("nan"), 0, 1)}, {"view": "bogus"},
+                {"view": "+x", "up": (1, 0, 0)}, {"eye": (1, 2)}, {"bogus": 1}]),
+])
+def test_every_render_keyword_is_checked(keyword, values):
+    renderer = uvr.Renderer(uvr.load(DISK))
+    for value in values:
+        with pytest.raises((uvr.Error, ValueError)) as error:
+            renderer.render(size=(8, 8), **{keyword: value}) if keyword != "size" else renderer.render(size=value)
+        named = {"camera": ("fovy", "eye", "at", "up", "view", "camera", "bogus")}.get(keyword, (keyword,))
+        assert any(name in str(error.value) for name in named), (keyword, value, str(error.value))
+
+
+def test_every_constructor_keyword_is_checked():
+    mesh = uvr.load(DISK)
+    for value in (-1, 2 ** 40):
+        with pytest.raises((uvr.Error, ValueError), match="leaf_size"):
+            uvr.Renderer(mesh, leaf_size=value)
+    for rng in ((5, 1), (5, 5), (float("nan"), 1), (0, float("inf"))):
+        # Refused where it is given, not at the first frame.
+        with pytest.raises((uvr.Error, ValueError), match="range"):
+            uvr.TransferFunction("viridis", range=rng)
+        with pytest.raises((uvr.Error, ValueError), match="range"):
+            uvr.TransferFunction.from_arrays(np.array([[0, 0, 0, 0], [1, 1, 1, 1]], dtype=np.float32), range=rng)
+    with pytest.raises((uvr.Error, ValueError), match="view"):
+        uvr.Renderer(mesh).default_camera(view="sideways")
+    with pytest.raises((uvr.Error, ValueError), match="fovy"):
+        uvr.Renderer(mesh).default_camera(fovy=0)
+
+
+def test_named_views_match_the_command(tmp_path):
+    assert uvr.view_names() == ["+x", "-x", "+y", "-y", "+z", "-z", "iso"]
+    renderer = uvr.Renderer(uvr.load(DISK))
+    at = np.array(renderer.default_camera().at)
+    for name in uvr.view_names():
+        camera = renderer.default_camera(view=name)
+        direction = np.array(camera.eye) - at
+        direction /= np.linalg.norm(direction)
+        expected = {"+x": (1, 0, 0), "-x": (-1, 0, 0), "+y": (0, 1, 0), "-y": (0, -1, 0), "+z": (0, 0, 1),
+                    "-z": (0, 0, -1), "iso": np.ones(3) / np.sqrt(3)}[name]
+        np.testing.assert_allclose(direction, expected, atol=1e-6)
+        # Framed as the reset camera: the same distance from the focal point.
+        assert np.linalg.norm(np.array(camera.eye) - at) == pytest.approx(
+            np.linalg.norm(np.array(renderer.default_camera().eye) - at), rel=1e-5)
+    png = tmp_path / "iso.png"
+    result = run_cli("render", DISK, "--view", "iso", "--size", "48x40", "-o", str(png))
+    assert result.returncode == 0, result.stderr
+    image = renderer.render(camera={"view": "iso"}, size=(48, 40))
+    np.testing.assert_array_equal(image[:, :, :3], uvr.read_png(str(png)))
+    assert not np.array_equal(image, renderer.render(size=(48, 40)))
+
+
+def test_statistics_mean_the_same_as_the_command(tmp_path):
+    """tf_update_ms: the transfer-function update the frame waited for (0 when unchanged); build_ms: the
+    backend's build, done by the constructor."""
+    mesh = uvr.load(DISK)
+    started = time.perf_counter()
+    renderer = uvr.Renderer(mesh)
+    constructed_ms = (time.perf_counter() - started) * 1e3
+    tf = uvr.TransferFunction("viridis")
+    started = time.perf_counter()
+    renderer.render(size=(16, 16), tf=tf)
+    first_ms = (time.perf_counter() - started) * 1e3
+    first = renderer.last_stats
+    assert first["build_ms"] <= constructed_ms + 1.0, (first, constructed_ms)
+    assert 0 < first["tf_update_ms"] < first_ms
+    assert first["tf_update_ms"] != first["build_ms"]
+    renderer.render(size=(16, 16), tf=tf)
+    assert renderer.last_stats["tf_update_ms"] == 0
+    assert renderer.last_stats["build_ms"] == first["build_ms"]
+    renderer.render(size=(16, 16), tf=uvr.TransferFunction("inferno"))
+    assert renderer.last_stats["tf_update_ms"] > 0
+    # The command's --stats: the same definitions.
+    stats_path = tmp_path / "s.json"
+    result = run_cli("render", DISK, "--size", "16x16", "--tf", "viridis", "--frames", "2", "-o",
+                     str(tmp_path / "s.png"), "--stats", str(stats_path))
+    assert result.returncode == 0, result.stderr
+    cli = json.loads(stats_path.read_text())
+    assert 0 < cli["tf_update_ms"] < cli["build_ms"] + cli["render_ms"] and cli["tf_update_ms"] != cli["build_ms"]
+
+
+def test_psnr_of_identical_images_is_infinite(tmp_path):
+    image = uvr.Renderer(uvr.load(DISK)).render(size=(16, 16))
+    result = uvr.compare(image, image)
+    assert result["ssim"] == 1.0 and result["psnr"] == float("inf")
+    png = tmp_path / "a.png"
+    uvr.write_png(str(png), image)
+    assert "PSNR inf dB" in run_cli("compare", str(png), str(png)).stdout
+    assert json.loads(run_cli("compare", str(png), str(png), "--json").stdout)["psnr"] is None
+
+
+def test_a_constant_field_is_visible():
+    points, cells, celltypes, _, _ = box_grid(2)
+    mesh = uvr.Mesh(points, cells, celltypes, point_data={"c": np.full(len(points), 7.0)})
+    image = uvr.Renderer(mesh).render(size=(16, 16))
+    assert image[8, 8, 3] > 0
 
 
 def test_cuda_backend_as_the_command(tmp_path):
@@ -285,3 +394,35 @@ def test_input_errors():
     with pytest.raises(uvr.Error, match="time steps"):
         uvr.load(DISK, time_step=3)
     assert uvr.load(DISK, field="Temp").field_names == ["Temp"]
+
+
+def graded_ticks(n, length, first):
+    """n + 1 ticks from 0 to `length`, spacings growing geometrically from `first`."""
+    lo, hi = 1.0 + 1e-9, 2.0
+    for _ in range(100):
+        ratio = (lo + hi) / 2
+        lo, hi = (lo, ratio) if first * (ratio ** n - 1) / (ratio - 1) > length else (ratio, hi)
+    ticks = np.concatenate([[0.0], np.cumsum(first * ratio ** np.arange(n))])
+    return ticks * length / ticks[-1]
+
+
+def test_default_opacity_unit_follows_the_domain_not_the_finest_cells():
+    """A 20 m tunnel graded down to 1.6 cm at its walls: the default unit is ParaView's (diagonal / cbrt(cells)),
+    and the image shows more of the field than with a unit of the median cell (the earlier default)."""
+    xs, ys, zs = graded_ticks(24, 20.0, 0.016), graded_ticks(8, 4.0, 0.016), graded_ticks(8, 4.0, 0.016)
+    z, y, x = np.meshgrid(zs, ys, xs, indexing="ij")
+    points = np.stack([x.ravel(), y.ravel(), z.ravel()], axis=1)
+    nx, ny = len(xs), len(ys)
+    index = lambda i, j, k: (k * ny + j) * nx + i
+    cells = [[8, index(i, j, k), index(i + 1, j, k), index(i + 1, j + 1, k), index(i, j + 1, k), index(i, j, k + 1),
+              index(i + 1, j, k + 1), index(i + 1, j + 1, k + 1), index(i, j + 1, k + 1)]
+             for k in range(len(zs) - 1) for j in range(ny - 1) for i in range(nx - 1)]
+    mesh = uvr.Mesh(points, np.array(cells, dtype=np.int64).ravel(), np.full(len(cells), 12, dtype=np.uint8),
+                    point_data={"f": np.sin(points[:, 0] / 3) + points[:, 1] / 4})
+    renderer = uvr.Renderer(mesh)
+    image = renderer.render(size=(128, 128), camera={"view": "-y"})
+    stats = renderer.last_stats
+    assert stats["unit"] == pytest.approx(np.sqrt(20 ** 2 + 4 ** 2 + 4 ** 2) / len(cells) ** (1 / 3), rel=1e-5)
+    thin = renderer.render(size=(128, 128), camera={"view": "-y"}, unit=stats["s1"])
+    spread = lambda img: img[:, :, :3].astype(float).mean(axis=2)[img[:, :, 3] > 0].std()
+    assert spread(image) > 1.5 * spread(thin)

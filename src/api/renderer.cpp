@@ -5,7 +5,10 @@
 #include <uvr/renderer.h>
 #include <uvr/system.h>
 
+#include <algorithm>
+#include <cmath>
 #include <optional>
+#include <sstream>
 
 namespace uvr {
 
@@ -18,12 +21,24 @@ bool sameColorMap(const ColorMap &a, const ColorMap &b) {
 
 } // namespace
 
+ValueRange defaultTransferRange(ValueRange r) {
+  if (r.min < r.max)
+    return r;
+  const float half = 0.5f * std::max(1.f, std::fabs(r.min) * 1e-3f);
+  return {r.min - half, r.min + half};
+}
+
 struct VolumeRenderer::Impl {
   VolumeMesh mesh; // keeps the data the renderer refers to
   int fieldIndex;
   Renderer renderer;
   std::optional<ColorMap> map; // the transfer function set last, and its range
   ValueRange range;
+  // What the next frame reports as tf_update_ms: the metadata update since the last frame, timed where a
+  // backend did it (a function set before any backend is timed when the backend takes it in prepare).
+  double tfUpdateMs = 0.0;
+  bool tfTimed = false;   // tfUpdateMs holds an update on a backend
+  bool tfPending = false; // set, but no backend has taken it yet
 
   Impl(VolumeMesh handle, int field, uint32_t leafSize)
       : mesh(std::move(handle)), fieldIndex(field), renderer(detail::Access::mesh(mesh), field, leafSize) {}
@@ -41,15 +56,39 @@ int VolumeRenderer::fieldIndex() const { return impl_->fieldIndex; }
 uint32_t VolumeRenderer::leafSize() const { return impl_->renderer.leafSize(); }
 
 void VolumeRenderer::setTransferFunction(const ColorMap &map, ValueRange range) {
+  if (!(range.min < range.max) || !std::isfinite(range.min) || !std::isfinite(range.max)) {
+    std::ostringstream text;
+    text << "invalid transfer-function range [" << range.min << ", " << range.max
+         << "]: the low end must be below the high end, both finite";
+    throw Error(text.str());
+  }
   if (impl_->map && sameColorMap(*impl_->map, map) && impl_->range.min == range.min &&
       impl_->range.max == range.max)
     return;
+  const bool anyBackend = impl_->renderer.prepared(Backend::Cpu) || impl_->renderer.prepared(Backend::Cuda);
+  const Timer timer;
   impl_->renderer.setTransferFunction(TransferFunction(map, range.min, range.max));
+  impl_->tfUpdateMs = timer.milliseconds();
+  impl_->tfTimed = anyBackend;
+  impl_->tfPending = !anyBackend;
   impl_->map = map;
   impl_->range = range;
 }
 
-void VolumeRenderer::prepare(Backend backend) { impl_->renderer.prepare(backend); }
+void VolumeRenderer::prepare(Backend backend) {
+  Impl &d = *impl_;
+  if (d.renderer.prepared(backend))
+    return;
+  d.renderer.prepare(backend);
+  if (d.tfPending && d.map) {
+    // The new backend took the function in its build; time its update alone, as a change would be timed.
+    const Timer timer;
+    d.renderer.setTransferFunction(TransferFunction(*d.map, d.range.min, d.range.max));
+    d.tfUpdateMs = timer.milliseconds();
+    d.tfTimed = true;
+    d.tfPending = false;
+  }
+}
 
 FrameResult VolumeRenderer::render(const Camera &camera, const FrameSettings &settings) {
   FrameResult frame;
@@ -58,11 +97,18 @@ FrameResult VolumeRenderer::render(const Camera &camera, const FrameSettings &se
 }
 
 void VolumeRenderer::render(const Camera &camera, const FrameSettings &settings, FrameResult &result) {
-  if (length(cross(camera.at - camera.eye, camera.up)) == 0.f)
-    throw Error("the camera's view direction and view-up are collinear");
+  validateCamera(camera);
+  validateSettings(settings);
+  if (!impl_->map)
+    throw Error("no transfer function set");
   // The mesh's default step costs a pass over its cells, once: only where a setting asks for it.
   const bool defaults = !(settings.s1 > 0.f && settings.s2 > 0.f && settings.p > 0.f && settings.unit > 0.f);
-  const FrameSettings s = defaults ? withDefaultSampling(settings, impl_->mesh.defaultStep()) : settings;
+  const VolumeMesh &mesh = impl_->mesh;
+  const FrameSettings s = defaults ? withDefaultSampling(settings, mesh.defaultStep(),
+                                                         defaultUnitDistance(mesh.bounds(), mesh.cellCount()))
+                                   : settings;
+  validateSettings(s); // a given s2 below the default s1, say so by name
+  prepare(s.backend);
   RenderSettings internal;
   internal.integrator.mode = s.mode;
   internal.integrator.s1 = s.s1;
@@ -104,7 +150,9 @@ void VolumeRenderer::render(const Camera &camera, const FrameSettings &settings,
   stats.samplesPerPixelMean = double(frame.samplesTotal) / (double(s.width) * double(s.height));
   stats.samplesPerPixelMax = frame.samplesMax;
   stats.buildMs = renderer.buildMs(s.backend);
-  stats.tfUpdateMs = renderer.tfUpdateMs();
+  // One definition for every front end: the update this frame waited for, 0 when the function is unchanged.
+  stats.tfUpdateMs = impl_->tfTimed ? impl_->tfUpdateMs : 0.0;
+  impl_->tfTimed = false;
   stats.renderMs = renderMs;
   stats.s1 = s.s1;
   stats.s2 = s.s2;

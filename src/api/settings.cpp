@@ -6,6 +6,7 @@
 #include <tbb/info.h>
 
 #include <algorithm>
+#include <cmath>
 
 namespace uvr {
 
@@ -104,11 +105,47 @@ bool backendAvailable(Backend backend) {
 }
 
 FrameSettings withDefaultSampling(FrameSettings settings, float defaultStep) {
+  return withDefaultSampling(settings, defaultStep, defaultStep);
+}
+
+FrameSettings withDefaultSampling(FrameSettings settings, float defaultStep, float defaultUnit) {
   settings.s1 = settings.s1 > 0.f ? settings.s1 : defaultStep;
   settings.s2 = settings.s2 > 0.f ? settings.s2 : std::max(kDefaultS2Factor * defaultStep, settings.s1);
   settings.p = settings.p > 0.f ? settings.p : kDefaultP;
-  settings.unit = settings.unit > 0.f ? settings.unit : defaultStep;
+  settings.unit = settings.unit > 0.f ? settings.unit : defaultUnit;
   return settings;
+}
+
+float defaultUnitDistance(const Box3f &bounds, uint64_t cells) {
+  // vtkSMRepresentationProxy's default ScalarOpacityUnitDistance: diagonal / cbrt(cells).
+  if (cells == 0 || bounds.empty())
+    return 1.f;
+  const double diagonal = double(length(bounds.size()));
+  const double unit = diagonal / std::cbrt(double(cells));
+  return unit > 0.0 && std::isfinite(unit) ? float(unit) : 1.f;
+}
+
+void validateSettings(const FrameSettings &s) {
+  const auto check = [](float value, const char *name) {
+    if (!(value >= 0.f) || !std::isfinite(value))
+      throw Error(std::string(name) + " must be a positive finite number (0: the default); got " +
+                  std::to_string(value));
+  };
+  check(s.s1, "s1");
+  check(s.s2, "s2");
+  check(s.p, "p");
+  check(s.unit, "unit");
+  if (s.p > 0.f && s.p < 1.f)
+    throw Error("p must be at least 1; got " + std::to_string(s.p));
+  if (s.s1 > 0.f && s.s2 > 0.f && s.s2 < s.s1)
+    throw Error("s2 (" + std::to_string(s.s2) + ") must be at least s1 (" + std::to_string(s.s1) + ")");
+  if (s.width < 1 || s.height < 1 || s.width > 16384 || s.height > 16384)
+    throw Error("the image size must be 1 to 16384 pixels a side; got " + std::to_string(s.width) + "x" +
+                std::to_string(s.height));
+  for (const float c : {s.background.x, s.background.y, s.background.z})
+    if (!(c >= 0.f && c <= 1.f))
+      throw Error("background components must be in [0, 1]; got " + std::to_string(s.background.x) + "," +
+                  std::to_string(s.background.y) + "," + std::to_string(s.background.z));
 }
 
 int threadCount() { return tbb::info::default_concurrency(); }

@@ -38,6 +38,9 @@ struct Glyph {
 
 constexpr int kGlyphWidth = 5, kGlyphHeight = 7, kAdvance = 6;
 
+/// The colour bar's frame: mid grey, visible on the black of a background and of the map's low end.
+constexpr std::array<uint8_t, 3> kFrame = {160, 160, 160};
+
 constexpr Glyph kFont[] = {
     {'0', {" ### ", "#   #", "#  ##", "# # #", "##  #", "#   #", " ### "}},
     {'1', {"  #  ", " ##  ", "  #  ", "  #  ", "  #  ", "  #  ", " ### "}},
@@ -51,10 +54,13 @@ constexpr Glyph kFont[] = {
     {'9', {" ### ", "#   #", "#   #", " ####", "    #", "   # ", " ##  "}},
     {'a', {"     ", "     ", " ### ", "    #", " ####", "#   #", " ####"}},
     {'e', {"     ", "     ", " ### ", "#   #", "#####", "#    ", " ### "}},
+    {'i', {"  #  ", "     ", " ##  ", "  #  ", "  #  ", "  #  ", " ### "}},
     {'l', {" ##  ", "  #  ", "  #  ", "  #  ", "  #  ", "  #  ", " ### "}},
     {'m', {"     ", "     ", "## # ", "# # #", "# # #", "#   #", "#   #"}},
     {'p', {"     ", "     ", "#### ", "#   #", "#### ", "#    ", "#    "}},
+    {'r', {"     ", "     ", "# ## ", "##  #", "#    ", "#    ", "#    "}},
     {'s', {"     ", "     ", " ####", "#    ", " ### ", "    #", "#### "}},
+    {'x', {"     ", "     ", "#   #", " # # ", "  #  ", " # # ", "#   #"}},
 };
 
 const Glyph *findGlyph(char c) {
@@ -99,9 +105,10 @@ void drawText(Image &image, int x, int y, const std::string &text, int unit) {
   }
 }
 
-/// Draws the colour bar for the scale [low, high] at the right edge: the title, then the bar with ticks
-/// and labels at its minimum, middle and maximum. Leaves the image as it is when the bar would cover too
-/// much of it; drops the title first.
+/// Draws the colour bar for the scale [low, high] at the right edge: the title ("samples per pixel", or
+/// "samples" where that does not fit), then the bar in a grey frame (its black end stays visible on black)
+/// with ticks and labels at its minimum, middle and maximum. Leaves the image as it is when the bar would
+/// cover too much of it; drops the title first.
 void drawColorBar(Image &image, uint64_t low, uint64_t high) {
   // Font pixels grow with the image, so that the bar looks alike from 64 to 4096 pixels.
   const int unit = std::max(1, std::min(image.width, image.height) / 200);
@@ -115,12 +122,14 @@ void drawColorBar(Image &image, uint64_t low, uint64_t high) {
   std::vector<uint64_t> values = {high, low};
   if (middle != low)
     values.push_back(middle);
-  const std::string title = "samples";
   int labelWidth = 0;
   for (uint64_t value : values)
     labelWidth = std::max(labelWidth, textWidth(std::to_string(value), unit));
   const int scaleWidth = labelWidth + gap + tickLength + barWidth + 2 * outline;
   const int maxWidth = image.width * 3 / 5;
+  std::string title = "samples per pixel";
+  if (textWidth(title, unit) > maxWidth)
+    title = "samples";
   const bool showTitle = std::max(scaleWidth, textWidth(title, unit)) <= maxWidth;
   const int titleHeight = showTitle ? glyphHeight + 3 * unit : 0;
   // Labels are centred on their ticks, so they reach half a glyph beyond the bar's ends; they need room to
@@ -134,7 +143,7 @@ void drawColorBar(Image &image, uint64_t low, uint64_t high) {
     drawText(image, right - textWidth(title, unit), margin, title, unit);
   const int barTop = margin + titleHeight + glyphHeight / 2, barBottom = barTop + barHeight;
   const int barLeft = right - barWidth;
-  fillRect(image, barLeft - outline, barTop - outline, right + outline, barBottom + outline, {0, 0, 0});
+  fillRect(image, barLeft - outline, barTop - outline, right + outline, barBottom + outline, kFrame);
   for (int y = barTop; y < barBottom; ++y)
     fillRect(image, barLeft, y, right, y + 1, inferno(double(barBottom - 1 - y) / (barHeight - 1)));
 

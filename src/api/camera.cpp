@@ -1,0 +1,86 @@
+#include <uvr/camera.h>
+#include <uvr/error.h>
+
+#include <cmath>
+#include <sstream>
+
+namespace uvr {
+
+namespace {
+
+struct NamedView {
+  const char *name;
+  Vec3f from; ///< direction from the focal point to the eye
+  Vec3f up;
+};
+
+// ParaView's view-direction buttons, named by the side the camera looks from.
+constexpr NamedView kViews[] = {
+    {"+x", {1.f, 0.f, 0.f}, {0.f, 0.f, 1.f}},  {"-x", {-1.f, 0.f, 0.f}, {0.f, 0.f, 1.f}},
+    {"+y", {0.f, 1.f, 0.f}, {0.f, 0.f, 1.f}},  {"-y", {0.f, -1.f, 0.f}, {0.f, 0.f, 1.f}},
+    {"+z", {0.f, 0.f, 1.f}, {0.f, 1.f, 0.f}},  {"-z", {0.f, 0.f, -1.f}, {0.f, 1.f, 0.f}},
+    {"iso", {1.f, 1.f, 1.f}, {0.f, 1.f, 0.f}},
+};
+
+bool finite(Vec3f v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+
+std::string text(Vec3f v) {
+  std::ostringstream out;
+  out << v.x << ',' << v.y << ',' << v.z;
+  return out.str();
+}
+
+} // namespace
+
+std::vector<std::string> cameraViewNames() {
+  std::vector<std::string> names;
+  for (const NamedView &view : kViews)
+    names.emplace_back(view.name);
+  return names;
+}
+
+Camera frameBounds(const Box3f &bounds, const std::string &view, float fovy, float aspect) {
+  if (!(aspect > 0.f) || !std::isfinite(aspect))
+    throw Error("the image aspect must be positive");
+  if (!(fovy > 0.f && fovy < 180.f))
+    validateCamera(Camera{{0.f, 0.f, 1.f}, {0.f, 0.f, 0.f}, {0.f, 1.f, 0.f}, fovy}); // throws, naming fovy
+  for (const NamedView &named : kViews) {
+    if (view != named.name)
+      continue;
+    Camera camera = frameBounds(bounds, fovy, aspect); // from +z, as the reset camera
+    if (view != "+z") {
+      const float distance = length(camera.eye - camera.at);
+      camera.eye = camera.at + normalize(named.from) * distance;
+      camera.up = named.up;
+    }
+    validateCamera(camera);
+    return camera;
+  }
+  std::string names;
+  for (const NamedView &named : kViews)
+    names += std::string(names.empty() ? "" : ", ") + named.name;
+  throw Error("unknown view '" + view + "': expected one of " + names);
+}
+
+void validateCamera(const Camera &c) {
+  if (!(c.fovy > 0.f && c.fovy < 180.f))
+    throw Error("fovy (the vertical view angle) must be between 0 and 180 degrees, exclusive; got " +
+                std::to_string(c.fovy));
+  if (!finite(c.eye))
+    throw Error("the camera's eye must be finite; got " + text(c.eye));
+  if (!finite(c.at))
+    throw Error("the camera's focal point (at) must be finite; got " + text(c.at));
+  if (!finite(c.up))
+    throw Error("the camera's view-up (up) must be finite; got " + text(c.up));
+  const Vec3f direction = c.at - c.eye;
+  if (!(length(direction) > 0.f))
+    throw Error("the camera's eye and focal point (at) must differ; both are " + text(c.eye));
+  if (!(length(c.up) > 0.f))
+    throw Error("the camera's view-up (up) must not be zero");
+  // Parallel within float precision: the image's horizontal axis would be undefined or noise.
+  if (!(length(cross(normalize(direction), normalize(c.up))) > 1e-6f))
+    throw Error("the camera's view-up (up) " + text(c.up) + " must not be parallel to the view direction " +
+                text(direction) + " (from eye to at)");
+}
+
+} // namespace uvr
