@@ -565,7 +565,7 @@ private:
         faces.appendStream(
             std::span(grid_.connectivity)
                 .subspan(size_t(grid_.offsets[c]), size_t(grid_.offsets[c + 1] - grid_.offsets[c])),
-            path_, cellsWhere_ + ", polyhedral cell " + std::to_string(c));
+            path_, "cell " + std::to_string(c));
     uint64_t points = grid_.points.size();
     for (uint64_t c = 0; c < cells; ++c) {
       if (grid_.types[c] == kVtkPolyhedron)

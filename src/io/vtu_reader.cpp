@@ -793,8 +793,7 @@ private:
         if (types[c] != kVtkPolyhedron)
           continue;
         faces.appendStream(std::span(values).subspan(size_t(begin), size_t(ends[c] - begin)), path_,
-                           "byte " + std::to_string(stream->position) + ", polyhedral cell " +
-                               std::to_string(c));
+                           "cell " + std::to_string(c));
         begin = ends[c];
       }
       return faces;

@@ -38,40 +38,48 @@ void PolyhedronFaces::appendStream(std::span<const int64_t> stream, const std::s
 
 namespace {
 
-/// Checks the faces against the grid before anything is made from them.
+/// Checks the faces against the grid before anything is made from them. Errors name the file's cell.
 void checkFaces(const UnstructuredGrid &grid, const PolyhedronFaces &faces, const std::string &source) {
-  const uint64_t polyhedra = uint64_t(std::count(grid.types.begin(), grid.types.end(), kVtkPolyhedron));
-  if (faces.polyhedronCount() != polyhedra)
+  std::vector<size_t> cells; ///< the file's index of each polyhedron
+  for (size_t c = 0; c < grid.types.size(); ++c)
+    if (grid.types[c] == kVtkPolyhedron)
+      cells.push_back(c);
+  if (faces.polyhedronCount() != cells.size())
     throw Error(source, "",
-                std::to_string(polyhedra) + " cells of type 42 (polyhedron), faces given for " +
+                std::to_string(cells.size()) + " cells of type 42 (polyhedron), faces given for " +
                     std::to_string(faces.polyhedronCount()));
   const uint64_t faceCount = faces.faceOffsets.size() - 1;
   if (faces.cellOffsets[0] != 0 || uint64_t(faces.cellOffsets.back()) != faces.faceIds.size())
     throw Error(source, "", "polyhedron face offsets do not span the face list");
   if (faces.faceOffsets[0] != 0 || uint64_t(faces.faceOffsets.back()) != faces.facePoints.size())
     throw Error(source, "", "face offsets do not span the face points");
-  for (size_t k = 0; k < faces.polyhedronCount(); ++k)
-    if (faces.cellOffsets[k + 1] <= faces.cellOffsets[k])
-      throw Error(source, "polyhedron " + std::to_string(k), "no faces, or face offsets decreasing");
   for (size_t f = 0; f < faceCount; ++f)
     if (faces.faceOffsets[f + 1] - faces.faceOffsets[f] < 3)
-      throw Error(source, "face " + std::to_string(f), "a polyhedron face needs at least 3 points");
+      throw Error(source, "",
+                  "face " + std::to_string(f) + " has fewer than 3 points, or face offsets decrease");
   // A face bounds at most two cells; more uses would let a short list of face ids ask for huge meshes.
   std::vector<uint8_t> uses(faceCount, 0);
-  for (size_t i = 0; i < faces.faceIds.size(); ++i) {
-    const int64_t id = faces.faceIds[i];
-    if (id < 0 || uint64_t(id) >= faceCount)
-      throw Error(source, "face entry " + std::to_string(i),
-                  "face id " + std::to_string(id) + " outside [0, " + std::to_string(faceCount) + ")");
-    if (++uses[size_t(id)] > 2)
-      throw Error(source, "face " + std::to_string(id), "a face used by more than two polyhedra");
-  }
   const uint64_t pointCount = grid.points.size();
-  for (size_t i = 0; i < faces.facePoints.size(); ++i)
-    if (faces.facePoints[i] < 0 || uint64_t(faces.facePoints[i]) >= pointCount)
-      throw Error(source, "face point entry " + std::to_string(i),
-                  "point index " + std::to_string(faces.facePoints[i]) + " outside [0, " +
-                      std::to_string(pointCount) + ")");
+  for (size_t k = 0; k < cells.size(); ++k) {
+    const std::string cell = "cell " + std::to_string(cells[k]);
+    if (faces.cellOffsets[k + 1] <= faces.cellOffsets[k])
+      throw Error(source, cell, "a polyhedron without faces, or face offsets decreasing");
+    for (int64_t slot = faces.cellOffsets[k]; slot < faces.cellOffsets[k + 1]; ++slot) {
+      const int64_t id = faces.faceIds[size_t(slot)];
+      if (id < 0 || uint64_t(id) >= faceCount)
+        throw Error(source, cell,
+                    "face id " + std::to_string(id) + " outside [0, " + std::to_string(faceCount) + ")");
+      if (++uses[size_t(id)] > 2)
+        throw Error(source, cell, "face " + std::to_string(id) + " is used by more than two polyhedra");
+      for (int64_t i = faces.faceOffsets[size_t(id)]; i < faces.faceOffsets[size_t(id) + 1]; ++i) {
+        const int64_t point = faces.facePoints[size_t(i)];
+        if (point < 0 || uint64_t(point) >= pointCount)
+          throw Error(source, cell,
+                      "point index " + std::to_string(point) + " of a face outside [0, " +
+                          std::to_string(pointCount) + ")");
+      }
+    }
+  }
 }
 
 } // namespace
