@@ -16,6 +16,7 @@
 #include <array>
 #include <cmath>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -214,15 +215,29 @@ std::string vtuText(const TestGrid &g, VtuFaces layout = VtuFaces::Stream) {
   return x.str();
 }
 
-/// An ascii legacy .vtk, version 4.2 (CELLS n size) or 5.1 (OFFSETS, CONNECTIVITY); cell data before point
-/// data when `cellDataFirst`. A polyhedron's entry is its face stream.
-std::string vtkText(const TestGrid &g, bool version51, bool cellDataFirst = false) {
+/// A legacy .vtk, version 4.2 (CELLS n size) or 5.1 (OFFSETS, CONNECTIVITY), ascii or binary (big-endian, as
+/// VTK writes it); cell data before point data when `cellDataFirst`. A polyhedron's entry is its face stream.
+std::string vtkText(const TestGrid &g, bool version51, bool cellDataFirst = false, bool binary = false) {
   std::ostringstream x;
-  x << "# vtk DataFile Version " << (version51 ? "5.1" : "4.2")
-    << "\ntest\nASCII\nDATASET UNSTRUCTURED_GRID\n"
-    << "POINTS " << g.points.size() << " float\n";
-  for (Vec3f p : g.points)
-    x << p.x << ' ' << p.y << ' ' << p.z << '\n';
+  auto put = [&](auto value) {
+    if (!binary) {
+      x << value << ' ';
+      return;
+    }
+    char bytes[sizeof(value)];
+    std::memcpy(bytes, &value, sizeof(value));
+    for (size_t i = sizeof(value); i-- > 0;)
+      x.put(bytes[i]);
+  };
+  x << "# vtk DataFile Version " << (version51 ? "5.1" : "4.2") << "\ntest\n"
+    << (binary ? "BINARY" : "ASCII") << "\nDATASET UNSTRUCTURED_GRID\nPOINTS " << g.points.size()
+    << " float\n";
+  for (Vec3f p : g.points) {
+    put(p.x);
+    put(p.y);
+    put(p.z);
+  }
+  x << '\n';
   std::vector<std::vector<int64_t>> entries;
   size_t size = 0;
   for (size_t c = 0; c < g.cells.size(); ++c) {
@@ -235,31 +250,39 @@ std::string vtkText(const TestGrid &g, bool version51, bool cellDataFirst = fals
       connectivity.insert(connectivity.end(), e.begin(), e.end());
       offsets.push_back(int64_t(connectivity.size()));
     }
-    x << "CELLS " << offsets.size() << ' ' << connectivity.size() << "\nOFFSETS vtktypeint64\n"
-      << joined(offsets) << "\nCONNECTIVITY vtktypeint64\n"
-      << joined(connectivity) << '\n';
+    x << "CELLS " << offsets.size() << ' ' << connectivity.size() << "\nOFFSETS vtktypeint64\n";
+    for (int64_t v : offsets)
+      put(v);
+    x << "\nCONNECTIVITY vtktypeint64\n";
+    for (int64_t v : connectivity)
+      put(v);
   } else {
     x << "CELLS " << entries.size() << ' ' << size + entries.size() << '\n';
-    for (const auto &e : entries)
-      x << e.size() << ' ' << joined(e) << '\n';
+    for (const auto &e : entries) {
+      put(int32_t(e.size()));
+      for (int64_t v : e)
+        put(int32_t(v));
+    }
   }
-  x << "CELL_TYPES " << g.types.size() << '\n' << joined(g.types) << '\n';
-  auto pointData = [&] {
-    x << "POINT_DATA " << g.points.size() << '\n';
-    for (const auto &[name, values] : g.pointFields)
-      x << "SCALARS " << name << " float\nLOOKUP_TABLE default\n" << joined(values) << '\n';
-  };
-  auto cellData = [&] {
-    x << "CELL_DATA " << g.cells.size() << '\n';
-    for (const auto &[name, values] : g.cellFields)
-      x << "SCALARS " << name << " float\nLOOKUP_TABLE default\n" << joined(values) << '\n';
+  x << "\nCELL_TYPES " << g.types.size() << '\n';
+  for (int type : g.types)
+    put(int32_t(type));
+  x << '\n';
+  auto data = [&](const char *section, size_t count, const auto &fields) {
+    x << section << ' ' << count << '\n';
+    for (const auto &[name, values] : fields) {
+      x << "SCALARS " << name << " float\nLOOKUP_TABLE default\n";
+      for (float v : values)
+        put(v);
+      x << '\n';
+    }
   };
   if (cellDataFirst) {
-    cellData();
-    pointData();
+    data("CELL_DATA", g.cells.size(), g.cellFields);
+    data("POINT_DATA", g.points.size(), g.pointFields);
   } else {
-    pointData();
-    cellData();
+    data("POINT_DATA", g.points.size(), g.pointFields);
+    data("CELL_DATA", g.cells.size(), g.cellFields);
   }
   return x.str();
 }
@@ -353,6 +376,8 @@ TEST_F(Polyhedra, HexahedraAsPolyhedraRenderAsHexahedra) {
       {"all42.vtk", vtkText(all, false)},
       {"all51.vtk", vtkText(all, true)},
       {"inward51.vtk", vtkText(inward, true)},
+      {"some_binary42.vtk", vtkText(some, false, false, true)},
+      {"binary51.vtk", vtkText(inward, true, true, true)},
   };
   for (const Variant &v : variants) {
     SCOPED_TRACE(v.name);
