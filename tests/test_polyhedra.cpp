@@ -486,6 +486,99 @@ TEST_F(Polyhedra, MalformedPolyhedraAreRefused) {
   expectRefused("thrice.vtu", vtuText(three, VtuFaces::Vtk94), "more than two polyhedra");
 }
 
+#if UVR_HAVE_NETCDF
+/// Exodus II NFACED: a hexahedron and a pentagonal prism beside it (a house's shape, extruded) as polyhedra
+/// over one NSIDED face block, the square between them shared; a nodal and an element variable.
+const char *kNfacedCdl = R"(netcdf nfaced {
+dimensions:
+	len_name = 33 ;
+	time_step = UNLIMITED ;
+	num_dim = 3 ;
+	num_nodes = 14 ;
+	num_elem = 2 ;
+	num_el_blk = 1 ;
+	num_fa_blk = 1 ;
+	num_fa_in_blk1 = 12 ;
+	num_nod_per_fa1 = 50 ;
+	num_el_in_blk1 = 2 ;
+	num_fac_per_el1 = 13 ;
+	num_nod_var = 1 ;
+	num_elem_var = 1 ;
+variables:
+	float time_whole(time_step) ;
+	int eb_prop1(num_el_blk) ;
+	int fa_prop1(num_fa_blk) ;
+	float coordx(num_nodes) ;
+	float coordy(num_nodes) ;
+	float coordz(num_nodes) ;
+	int fbconn1(num_nod_per_fa1) ;
+		fbconn1:elem_type = "nsided" ;
+	int fbepecnt1(num_fa_in_blk1) ;
+	int facconn1(num_fac_per_el1) ;
+		facconn1:elem_type = "NFACED" ;
+	int ebepecnt1(num_el_in_blk1) ;
+	char name_nod_var(num_nod_var, len_name) ;
+	float vals_nod_var1(time_step, num_nodes) ;
+	char name_elem_var(num_elem_var, len_name) ;
+	float vals_elem_var1eb1(time_step, num_el_in_blk1) ;
+data:
+ time_whole = 0 ;
+ eb_prop1 = 1 ;
+ fa_prop1 = 1 ;
+ coordx = 0, 1, 1, 0, 0, 1, 1, 0, 2, 2, 2, 2, 1.5, 1.5 ;
+ coordy = 0, 0, 1, 1, 0, 0, 1, 1, 0, 1, 0, 1, 0, 1 ;
+ coordz = 0, 0, 0, 0, 1, 1, 1, 1, 0, 0, 1, 1, 1.5, 1.5 ;
+ fbconn1 = 1, 4, 3, 2,  5, 6, 7, 8,  1, 2, 6, 5,  3, 4, 8, 7,  4, 1, 5, 8,  2, 3, 7, 6,
+   2, 9, 11, 13, 6,  3, 7, 14, 12, 10,  2, 3, 10, 9,  9, 10, 12, 11,  11, 12, 14, 13,  13, 14, 7, 6 ;
+ fbepecnt1 = 4, 4, 4, 4, 4, 4, 5, 5, 4, 4, 4, 4 ;
+ facconn1 = 1, 2, 3, 4, 5, 6,  6, 7, 8, 9, 10, 11, 12 ;
+ ebepecnt1 = 6, 7 ;
+ name_nod_var = "t" ;
+ vals_nod_var1 = 0, 1, 1, 0, 0, 1, 1, 0, 2, 2, 2, 2, 1.5, 1.5 ;
+ name_elem_var = "t" ;
+ vals_elem_var1eb1 = 10, 20 ;
+}
+)";
+
+TEST_F(Polyhedra, ExodusNfacedBlocks) {
+  const std::string cdl = write("nfaced.cdl", kNfacedCdl), exo = (dir_ / "nfaced.e").string();
+  const std::string command = std::string(UVR_NCGEN) + " -k nc3 -o '" + exo + "' '" + cdl + "'";
+  ASSERT_EQ(std::system(command.c_str()), 0) << command;
+  const VolumeMesh mesh = VolumeMesh::load(exo);
+  const CellCounts counts = mesh.cellCounts();
+  EXPECT_EQ(counts.polyhedron, 2u);
+  // The hexahedron: 6 pyramids. The prism: 2 pentagons (3 triangles each), 5 quads.
+  EXPECT_EQ(counts.polyhedronPyramids, 11u);
+  EXPECT_EQ(counts.polyhedronTets, 6u);
+  EXPECT_EQ(counts.inverted, 0u);
+  expectPositiveVolumes(mesh);
+  const int cell = mesh.findField("cell:t"), point = mesh.findField("t");
+  ASSERT_GE(cell, 0);
+  ASSERT_GE(point, 0);
+  EXPECT_EQ(mesh.field(point).centering, Centering::Point);
+  std::vector<float> cellValues(mesh.fieldValues(cell).begin(), mesh.fieldValues(cell).end());
+  EXPECT_EQ(std::count(cellValues.begin(), cellValues.end(), 10.f), 6);
+  EXPECT_EQ(std::count(cellValues.begin(), cellValues.end(), 20.f), 11);
+  // The point field is x, and so is each centre's average.
+  const auto points = mesh.points();
+  const auto values = mesh.fieldValues(point);
+  for (size_t i = 0; i < points.size(); ++i)
+    EXPECT_NEAR(values[i], points[i].x, 1e-5f);
+  // The shared face listed twice by the prism: three uses, refused.
+  std::string three = kNfacedCdl;
+  const std::string prismFaces = "6, 7, 8, 9, 10, 11, 12 ;";
+  three.replace(three.find(prismFaces), prismFaces.size(), "6, 6, 8, 9, 10, 11, 12 ;");
+  const std::string bad = write("thrice.cdl", three), badExo = (dir_ / "bad.e").string();
+  ASSERT_EQ(std::system((std::string(UVR_NCGEN) + " -k nc3 -o '" + badExo + "' '" + bad + "'").c_str()), 0);
+  try {
+    VolumeMesh::load(badExo);
+    ADD_FAILURE() << "a face of three polyhedra was accepted";
+  } catch (const Error &e) {
+    EXPECT_NE(std::string(e.what()).find("more than two polyhedra"), std::string::npos) << e.what();
+  }
+}
+#endif
+
 TEST(PolyhedronFaces, StreamMustFillItsSpan) {
   PolyhedronFaces faces;
   const std::vector<int64_t> tetra = {4, 3, 0, 1, 2, 3, 0, 3, 1, 3, 1, 3, 2, 3, 0, 2, 3};
