@@ -37,7 +37,16 @@ def add_case_arguments(parser):
 def selected_cases(args, section):
     """The cases of `section` that add_case_arguments' --quick and --only select."""
     cases = load_cases(args.cases, section, args.quick)
-    return [c for c in cases if not args.only or any(o in c["name"] for o in args.only)]
+    cases = [c for c in cases if not args.only or any(o in c["name"] for o in args.only)]
+    # Cases on data made apart (bench/make_cfd_cases.sh) are skipped where it was not made.
+    kept = []
+    for c in cases:
+        mesh = resolve(c["mesh"], args.data)
+        if c.get("optional") and not os.path.exists(mesh):
+            log(f"{c['name']}: skipped, {mesh} is absent ({c['optional']})")
+            continue
+        kept.append(c)
+    return kept
 
 
 def load_cases(path, section, quick):
@@ -76,9 +85,16 @@ def mesh_info(uvr, mesh):
 
 
 def field_info(info, name):
-    for field in info["fields"]:
-        if field["name"] == name:
-            return field
+    """The field `uvr render --field name` renders: "point:p" or "cell:p" by centring, a plain name the point
+    field where a point and a cell field share it."""
+    for prefix in ("point", "cell"):
+        if name.startswith(prefix + ":"):
+            for field in info["fields"]:
+                if field["name"] == name[len(prefix) + 1:] and field["centering"] == prefix:
+                    return field
+    named = [f for f in info["fields"] if f["name"] == name]
+    if named:
+        return next((f for f in named if f["centering"] == "point"), named[0])
     sys.exit(f"no field {name}; fields: {[f['name'] for f in info['fields']]}")
 
 

@@ -65,6 +65,10 @@ void runInfo(const InfoOptions &o) {
       {"bounds",
        {bounds.lower.x, bounds.upper.x, bounds.lower.y, bounds.upper.y, bounds.lower.z, bounds.upper.z}},
       {"inverted_cells", cells.inverted},
+      {"polyhedra",
+       {{"polyhedron", cells.polyhedron},
+        {"tet", cells.polyhedronTets},
+        {"pyramid", cells.polyhedronPyramids}}},
       {"volume_min", volumes.min},
       {"volume_median", volumes.median},
       {"volume_max", volumes.max},
@@ -90,6 +94,11 @@ void runInfo(const InfoOptions &o) {
               static_cast<unsigned long long>(mesh.cellCount()), static_cast<unsigned long long>(cells.tet),
               static_cast<unsigned long long>(cells.hex), static_cast<unsigned long long>(cells.wedge),
               static_cast<unsigned long long>(cells.pyramid), static_cast<unsigned long long>(cells.skipped));
+  if (cells.polyhedron > 0)
+    std::printf("  polyhedron      %llu (decomposed into %llu tetrahedra, %llu pyramids)\n",
+                static_cast<unsigned long long>(cells.polyhedron),
+                static_cast<unsigned long long>(cells.polyhedronTets),
+                static_cast<unsigned long long>(cells.polyhedronPyramids));
   for (int i = 0; i < mesh.fieldCount(); ++i) {
     const FieldInfo field = mesh.field(i);
     const ValueRange range = mesh.fieldRange(i);

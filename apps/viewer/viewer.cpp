@@ -246,8 +246,8 @@ private:
                      ImGuiWindowFlags_NoTitleBar);
     const FieldInfo field = setup_.mesh.field(setup_.fieldIndex);
     ImGui::TextWrapped("%s", setup_.meshPath.c_str());
-    ImGui::Text("%llu cells, field %s", static_cast<unsigned long long>(setup_.mesh.cellCount()),
-                field.name.c_str());
+    ImGui::Text("%llu cells, field %s (%s)", static_cast<unsigned long long>(setup_.mesh.cellCount()),
+                field.name.c_str(), field.centering == Centering::Point ? "point" : "cell");
     ImGui::Separator();
 
     // Statistics of the frame on screen.

@@ -37,6 +37,9 @@ struct CellCounts {
   uint64_t tet = 0, hex = 0, wedge = 0, pyramid = 0;
   uint64_t skipped = 0;  ///< lower-dimensional cells of the input that were not kept
   uint64_t inverted = 0; ///< cells whose winding was reversed on load (they render as the others)
+  /// Polyhedra of the file (VTK type 42), decomposed on load into tetrahedra and pyramids around their
+  /// centres: these pieces are counted in `tet` and `pyramid` too.
+  uint64_t polyhedron = 0, polyhedronTets = 0, polyhedronPyramids = 0;
 
   uint64_t total() const { return tet + hex + wedge + pyramid; }
 };
@@ -124,10 +127,13 @@ public:
   std::span<const float> fieldValues(int index) const;
   /// The range of the field's finite values; {0, 0} when it has none.
   ValueRange fieldRange(int index) const;
-  /// The index of the first field named `name`, or -1.
+  /// The index of the field named `name`, or -1. A prefix "point:" or "cell:" picks the field of that
+  /// centring (a file may hold a point and a cell field of one name); a plain name picks the point field
+  /// where there are both, else the first field of that name.
   int findField(const std::string &name) const;
-  /// The index of the field to render: `name`, or the first field when empty. Throws uvr::Error naming the
-  /// source when the mesh has no volume cells or no fields, or no field `name` (listing the fields).
+  /// The index of the field to render: `name` (as findField takes it), or the first field when empty. Throws
+  /// uvr::Error naming the source when the mesh has no volume cells or no fields, or no field `name` (listing
+  /// the fields).
   int chooseField(const std::string &name) const;
   /// A mesh with only the fields `indices`, in that order. Moves the data when this is its only handle.
   VolumeMesh withFields(const std::vector<int> &indices) &&;

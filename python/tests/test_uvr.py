@@ -110,6 +110,17 @@ def test_arrays_round_trip():
     assert first.std() > 0
 
 
+def test_field_centring_prefixes():
+    """field="point:p" / "cell:p" pick one of two fields named p; a plain "p" is the point field."""
+    points, cells, celltypes, point_data, cell_data = box_grid(3)
+    mesh = uvr.Mesh(points, cells, celltypes, point_data={"p": point_data["wave"]}, cell_data={"p": cell_data["id"]})
+    image = {field: uvr.Renderer(mesh, field=field).render(size=(48, 48)) for field in ("point:p", "cell:p", "p")}
+    np.testing.assert_array_equal(image["p"], image["point:p"])
+    assert not np.array_equal(image["point:p"], image["cell:p"])
+    with pytest.raises(uvr.Error, match="point:p, cell:p"):
+        uvr.Renderer(mesh, field="cell:q")
+
+
 def test_offsets_and_flat_layouts_agree():
     points, cells, celltypes, point_data, _ = box_grid(3)
     offsets, connectivity = split_flat(cells, len(celltypes))

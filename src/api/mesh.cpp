@@ -106,6 +106,9 @@ CellCounts VolumeMesh::cellCounts() const {
   counts.pyramid = m.pyramidCount();
   counts.skipped = m.skippedCells;
   counts.inverted = m.invertedCells;
+  counts.polyhedron = m.polyhedra.polyhedra;
+  counts.polyhedronTets = m.polyhedra.tets;
+  counts.polyhedronPyramids = m.polyhedra.pyramids;
   return counts;
 }
 
@@ -156,9 +159,14 @@ int VolumeMesh::chooseField(const std::string &name) const {
     return 0;
   const int index = mesh.findField(name);
   if (index < 0) {
+    // Names shared by a point and a cell field are listed with the prefix that tells them apart.
     std::string names;
-    for (const ScalarField &f : mesh.fields)
-      names += (names.empty() ? "" : ", ") + f.name;
+    for (const ScalarField &f : mesh.fields) {
+      const bool shared = std::count_if(mesh.fields.begin(), mesh.fields.end(),
+                                        [&](const ScalarField &g) { return g.name == f.name; }) > 1;
+      const std::string prefix = !shared ? "" : f.centering == Centering::Point ? "point:" : "cell:";
+      names += (names.empty() ? "" : ", ") + prefix + f.name;
+    }
     throw Error(source, "", "no field named '" + name + "'; fields: " + names);
   }
   return index;

@@ -1,7 +1,8 @@
 // Exodus II (.e, .ex2, .exo, .g) reader through libnetcdf: netCDF-3 and netCDF-4 files.
 //
 // Every element block of a volume type becomes cells (higher-order ones by their corners, which Exodus lists
-// first, as VTK does); other blocks are skipped. Nodal variables become point fields and element variables,
+// first, as VTK does), NFACED blocks (polyhedra over NSIDED face blocks) decomposed as .vtu polyhedra are;
+// other blocks are skipped. Nodal variables become point fields and element variables,
 // stored per block, become one cell field over all kept blocks (NaN in blocks that lack the variable).
 #include "io/mesh_io.h"
 #include <uvr/error.h>
@@ -11,6 +12,7 @@
 #if UVR_HAVE_NETCDF
 
 #include "io/text_scan.h"
+#include "mesh/polyhedra.h"
 
 #include <netcdf.h>
 
@@ -224,13 +226,16 @@ public:
     // Blocks in index order, found by their connect<b> variables: num_el_blk alone may claim any count.
     const uint64_t blockCount = dimension("num_el_blk", false);
     std::vector<uint64_t> blocks;
+    // NFACED (polyhedral) blocks have facconn<b> instead.
     for (const std::string &name : variableNames_) {
       uint64_t b = 0;
-      if (name.starts_with("connect") && parseNumber(std::string_view(name).substr(7), b) && b >= 1 &&
-          b <= blockCount)
-        blocks.push_back(b);
+      for (std::string_view prefix : {"connect", "facconn"})
+        if (name.starts_with(prefix) && parseNumber(std::string_view(name).substr(prefix.size()), b) &&
+            b >= 1 && b <= blockCount)
+          blocks.push_back(b);
     }
     std::sort(blocks.begin(), blocks.end());
+    blocks.erase(std::unique(blocks.begin(), blocks.end()), blocks.end());
     std::vector<std::pair<uint64_t, uint64_t>> blockCells; // (block, elements) of the kept blocks
     for (uint64_t b : blocks)
       if (uint64_t cells = readBlock(grid, b, nodes))
@@ -238,6 +243,8 @@ public:
 
     readNodalVariables(grid, nodes);
     readElementVariables(grid, blockCells);
+    if (polyhedra_.polyhedronCount() > 0)
+      decomposePolyhedra(grid, polyhedra_, path_);
     return grid;
   }
 
@@ -464,6 +471,8 @@ private:
   uint64_t readBlock(UnstructuredGrid &grid, uint64_t b, uint64_t nodes) {
     const std::string index = std::to_string(b);
     const uint64_t elements = dimension("num_el_in_blk" + index, false);
+    if (elements > 0 && !hasVariable("connect" + index) && hasVariable("facconn" + index))
+      return readPolyhedronBlock(grid, index, elements);
     if (elements == 0 || !hasVariable("connect" + index))
       return 0; // an empty (null) block
     Variable v = variable("connect" + index);
@@ -509,6 +518,64 @@ private:
 
   static UninitVector<float> toFloat(const std::vector<double> &values) {
     return UninitVector<float>(values.begin(), values.end());
+  }
+
+  /// The faces of the face blocks (NSIDED: fbconn<f> holds each face's nodes, fbepecnt<f> their counts), in
+  /// block order: NFACED elements number them from 1 across the blocks.
+  void readFaceBlocks() {
+    facesRead_ = true;
+    const uint64_t faceBlocks = dimension("num_fa_blk", false);
+    for (uint64_t f = 1; f <= faceBlocks; ++f) {
+      const std::string index = std::to_string(f);
+      if (!hasVariable("fbconn" + index))
+        continue;
+      const Variable counts = variable("fbepecnt" + index), nodes = variable("fbconn" + index);
+      expectShape(counts, {dimension("num_fa_in_blk" + index, true)});
+      expectShape(nodes, {dimension("num_nod_per_fa" + index, true)});
+      uint64_t at = 0;
+      const std::vector<long long> perFace = readWhole<long long>(counts);
+      const std::vector<long long> ids = readWhole<long long>(nodes);
+      for (long long n : perFace) {
+        if (n < 3 || uint64_t(n) > ids.size() - at)
+          fail(counts.position, "a face of " + std::to_string(n) +
+                                    " nodes: fewer than 3, or more than fbconn" + index + " holds");
+        for (uint64_t i = at; i < at + uint64_t(n); ++i)
+          polyhedra_.facePoints.push_back(ids[i] - 1); // 1-based; checked with the cells
+        polyhedra_.faceOffsets.push_back(int64_t(polyhedra_.facePoints.size()));
+        at += uint64_t(n);
+      }
+      if (at != ids.size())
+        fail(counts.position, "the faces use " + std::to_string(at) + " of the " +
+                                  std::to_string(ids.size()) + " nodes of fbconn" + index);
+    }
+  }
+
+  /// An NFACED block: ebepecnt<b> faces per element, facconn<b> their numbers (from 1). Its elements are
+  /// polyhedra, decomposed once the fields are read.
+  uint64_t readPolyhedronBlock(UnstructuredGrid &grid, const std::string &index, uint64_t elements) {
+    if (!facesRead_)
+      readFaceBlocks();
+    const Variable counts = variable("ebepecnt" + index), faces = variable("facconn" + index);
+    expectShape(counts, {elements});
+    expectShape(faces, {dimension("num_fac_per_el" + index, true)});
+    const std::vector<long long> perElement = readWhole<long long>(counts);
+    const std::vector<long long> ids = readWhole<long long>(faces);
+    uint64_t at = 0;
+    for (long long n : perElement) {
+      if (n < 1 || uint64_t(n) > ids.size() - at)
+        fail(counts.position,
+             "an element of " + std::to_string(n) + " faces: none, or more than facconn" + index + " holds");
+      for (uint64_t i = at; i < at + uint64_t(n); ++i)
+        polyhedra_.faceIds.push_back(ids[i] - 1); // checked by decomposePolyhedra
+      polyhedra_.cellOffsets.push_back(int64_t(polyhedra_.faceIds.size()));
+      at += uint64_t(n);
+      grid.offsets.push_back(grid.offsets.back()); // the faces say it all
+      grid.types.push_back(kVtkPolyhedron);
+    }
+    if (at != ids.size())
+      fail(counts.position, "the elements use " + std::to_string(at) + " of the " +
+                                std::to_string(ids.size()) + " faces of facconn" + index);
+    return elements;
   }
 
   void readNodalVariables(UnstructuredGrid &grid, uint64_t nodes) {
@@ -566,6 +633,8 @@ private:
   uint64_t compressionLimit_ = 1;
   uint64_t timeSteps_ = 0;
   std::vector<std::string> variableNames_;
+  PolyhedronFaces polyhedra_; ///< of the NFACED blocks
+  bool facesRead_ = false;
 };
 
 } // namespace

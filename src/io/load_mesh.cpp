@@ -183,6 +183,9 @@ UnstructuredGrid mergeParts(const std::vector<std::string> &files) {
     for (int64_t index : part.connectivity)
       all.connectivity.push_back(index + pointBase);
     all.types.insert(all.types.end(), part.types.begin(), part.types.end());
+    all.polyhedra.polyhedra += part.polyhedra.polyhedra;
+    all.polyhedra.tets += part.polyhedra.tets;
+    all.polyhedra.pyramids += part.polyhedra.pyramids;
     for (size_t i = 0; i < all.fields.size(); ++i)
       all.fields[i].values.insert(all.fields[i].values.end(), part.fields[i].values.begin(),
                                   part.fields[i].values.end());

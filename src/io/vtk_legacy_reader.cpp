@@ -5,6 +5,7 @@
 #include "io/file_buffer.h"
 #include "io/mesh_io.h"
 #include "io/scalar_type.h"
+#include "mesh/polyhedra.h"
 #include <uvr/error.h>
 
 #include <algorithm>
@@ -12,6 +13,7 @@
 #include <cmath>
 #include <cstring>
 #include <optional>
+#include <span>
 #include <string_view>
 
 namespace uvr {
@@ -555,11 +557,26 @@ private:
       failAt(typesWhere_.empty() ? cellsWhere_ : typesWhere_, "CELL_TYPES lists " +
                                                                   std::to_string(grid_.types.size()) +
                                                                   " cells, CELLS " + std::to_string(cells));
+    // A polyhedron's entry is its face stream [nFaces, nPoints0, ids..., nPoints1, ids..., ...], in both
+    // layouts: counts, not point indices, which decomposePolyhedra checks.
+    PolyhedronFaces faces;
+    for (uint64_t c = 0; c < cells; ++c)
+      if (grid_.types[c] == kVtkPolyhedron)
+        faces.appendStream(
+            std::span(grid_.connectivity)
+                .subspan(size_t(grid_.offsets[c]), size_t(grid_.offsets[c + 1] - grid_.offsets[c])),
+            path_, "cell " + std::to_string(c));
     uint64_t points = grid_.points.size();
-    for (uint64_t i = 0; i < grid_.connectivity.size(); ++i)
-      if (grid_.connectivity[i] < 0 || uint64_t(grid_.connectivity[i]) >= points)
-        failAt(cellsWhere_, "point index " + std::to_string(grid_.connectivity[i]) + " at entry " +
-                                std::to_string(i) + " is outside [0, " + std::to_string(points) + ")");
+    for (uint64_t c = 0; c < cells; ++c) {
+      if (grid_.types[c] == kVtkPolyhedron)
+        continue;
+      for (auto i = uint64_t(grid_.offsets[c]); i < uint64_t(grid_.offsets[c + 1]); ++i)
+        if (grid_.connectivity[i] < 0 || uint64_t(grid_.connectivity[i]) >= points)
+          failAt(cellsWhere_, "point index " + std::to_string(grid_.connectivity[i]) + " at entry " +
+                                  std::to_string(i) + " is outside [0, " + std::to_string(points) + ")");
+    }
+    if (faces.polyhedronCount() > 0)
+      decomposePolyhedra(grid_, faces, path_);
     return std::move(grid_);
   }
 

@@ -6,6 +6,7 @@
 #include "io/file_buffer.h"
 #include "io/mesh_io.h"
 #include "io/scalar_type.h"
+#include "mesh/polyhedra.h"
 #include <uvr/error.h>
 
 #ifdef UVR_HAVE_LIBDEFLATE
@@ -26,6 +27,8 @@
 #include <cstring>
 #include <memory>
 #include <mutex>
+#include <optional>
+#include <span>
 #include <string_view>
 
 namespace uvr {
@@ -295,6 +298,7 @@ struct VtuGrid {
   Buffer<uint32_t> connectivity; ///< narrowed as it is read (see NarrowPointIndex)
   Buffer<uint8_t> types;
   std::vector<ScalarField> fields;
+  PolyhedronCounts polyhedra; ///< already decomposed into the cells above
 };
 
 class VtuReader {
@@ -746,7 +750,113 @@ private:
 
     readFields(piece.child("PointData"), Centering::Point, pointCount, grid.fields);
     readFields(piece.child("CellData"), Centering::Cell, cellCount, grid.fields);
+    if (std::find(grid.types.begin(), grid.types.end(), kVtkPolyhedron) != grid.types.end())
+      decompose(grid, readPolyhedra(piece.child("Cells"), grid.types));
     return grid;
+  }
+
+  std::optional<ArrayInfo> optionalCellArray(pugi::xml_node cells, std::string_view name) const {
+    for (pugi::xml_node node : cells.children("DataArray"))
+      if (node.attribute("Name").value() == name)
+        return cellArray(cells, name, cells);
+    return std::nullopt;
+  }
+
+  /// The faces of a piece's polyhedra: VTK's `faces` (each polyhedron's face stream) and `faceoffsets` (where
+  /// each cell's stream ends, -1 for other cells), or VTK 9.4's `face_connectivity` and `face_offsets` (the
+  /// faces) with `polyhedron_to_faces` and `polyhedron_offsets` (each cell's faces; offsets are ends, as the
+  /// cells' are). Every count is checked against the file before it is allocated (see prepare).
+  PolyhedronFaces readPolyhedra(pugi::xml_node cells, const Buffer<uint8_t> &types) const {
+    const uint64_t cellCount = types.size();
+    PolyhedronFaces faces;
+    auto readInts = [&](const ArrayInfo &array, uint64_t count) {
+      return readValues<std::vector<int64_t>>(array, count);
+    };
+    if (const std::optional<ArrayInfo> faceOffsets = optionalCellArray(cells, "faceoffsets")) {
+      const std::optional<ArrayInfo> stream = optionalCellArray(cells, "faces");
+      if (!stream)
+        fail(position(cells), "polyhedra with 'faceoffsets' but no 'faces' array");
+      const std::vector<int64_t> ends = readInts(*faceOffsets, cellCount);
+      int64_t end = 0;
+      for (uint64_t c = 0; c < cellCount; ++c) {
+        if (types[c] != kVtkPolyhedron)
+          continue;
+        if (ends[c] <= end)
+          fail(*faceOffsets, faceOffsets->position,
+               "face offset " + std::to_string(ends[c]) + " of polyhedral cell " + std::to_string(c) +
+                   " does not follow the previous one (" + std::to_string(end) + ")");
+        end = ends[c];
+      }
+      const std::vector<int64_t> values = readInts(*stream, uint64_t(end));
+      int64_t begin = 0;
+      for (uint64_t c = 0; c < cellCount; ++c) {
+        if (types[c] != kVtkPolyhedron)
+          continue;
+        faces.appendStream(std::span(values).subspan(size_t(begin), size_t(ends[c] - begin)), path_,
+                           "cell " + std::to_string(c));
+        begin = ends[c];
+      }
+      return faces;
+    }
+    const std::optional<ArrayInfo> cellFaceOffsets = optionalCellArray(cells, "polyhedron_offsets");
+    const std::optional<ArrayInfo> cellFaces = optionalCellArray(cells, "polyhedron_to_faces");
+    const std::optional<ArrayInfo> faceOffsets = optionalCellArray(cells, "face_offsets");
+    const std::optional<ArrayInfo> faceConnectivity = optionalCellArray(cells, "face_connectivity");
+    if (!cellFaceOffsets || !cellFaces || !faceOffsets || !faceConnectivity)
+      fail(position(cells), "polyhedra (cell type 42) without their faces: expected 'faces' and "
+                            "'faceoffsets', or 'face_connectivity', 'face_offsets', 'polyhedron_to_faces' "
+                            "and 'polyhedron_offsets'");
+    const std::vector<int64_t> cellEnds = readInts(*cellFaceOffsets, cellCount);
+    int64_t end = 0;
+    for (uint64_t c = 0; c < cellCount; ++c) {
+      const bool polyhedron = types[c] == kVtkPolyhedron;
+      if (polyhedron ? cellEnds[c] <= end : cellEnds[c] != end)
+        fail(*cellFaceOffsets, cellFaceOffsets->position,
+             "offset " + std::to_string(cellEnds[c]) + " of cell " + std::to_string(c) +
+                 (polyhedron ? " does not follow the previous one (" : " differs from the previous one (") +
+                 std::to_string(end) + ")");
+      end = cellEnds[c];
+      if (polyhedron)
+        faces.cellOffsets.push_back(end);
+    }
+    faces.faceIds = readInts(*cellFaces, uint64_t(end));
+    // The faces' count is not stored: the ids say how many there are.
+    int64_t faceCount = 0;
+    for (int64_t id : faces.faceIds) {
+      if (id < 0)
+        fail(*cellFaces, cellFaces->position, "face id " + std::to_string(id) + " is negative");
+      faceCount = std::max(faceCount, id + 1);
+    }
+    const std::vector<int64_t> faceEnds = readInts(*faceOffsets, uint64_t(faceCount));
+    for (size_t f = 0; f < faceEnds.size(); ++f)
+      if (faceEnds[f] < faces.faceOffsets.back() + 3)
+        fail(*faceOffsets, faceOffsets->position,
+             "face " + std::to_string(f) + " ends at " + std::to_string(faceEnds[f]) +
+                 ": fewer than 3 points, or offsets decreasing");
+      else
+        faces.faceOffsets.push_back(faceEnds[f]);
+    faces.facePoints = readInts(*faceConnectivity, uint64_t(faces.faceOffsets.back()));
+    return faces;
+  }
+
+  /// Replaces the piece's polyhedra by tetrahedra and pyramids (see decomposePolyhedra).
+  void decompose(VtuGrid &grid, const PolyhedronFaces &faces) const {
+    UnstructuredGrid all{std::move(grid.points),
+                         {grid.offsets.begin(), grid.offsets.end()},
+                         {grid.connectivity.begin(), grid.connectivity.end()},
+                         {grid.types.begin(), grid.types.end()},
+                         std::move(grid.fields),
+                         {}};
+    decomposePolyhedra(all, faces, path_);
+    grid.points = std::move(all.points);
+    grid.fields = std::move(all.fields);
+    grid.polyhedra = all.polyhedra;
+    grid.offsets = Buffer<int64_t>(all.offsets.size());
+    std::copy(all.offsets.begin(), all.offsets.end(), grid.offsets.begin());
+    grid.connectivity = Buffer<uint32_t>(all.connectivity.size());
+    std::copy(all.connectivity.begin(), all.connectivity.end(), grid.connectivity.begin());
+    grid.types = Buffer<uint8_t>(all.types.size());
+    std::copy(all.types.begin(), all.types.end(), grid.types.begin());
   }
 
   /// Every numeric array becomes one field; several components become their Euclidean magnitude, as the
@@ -783,6 +893,7 @@ private:
     if (pieces.size() == 1)
       return std::move(pieces[0]);
     uint64_t pointCount = 0, cellCount = 0, connectivityCount = 0;
+    VtuGrid grid;
     for (size_t p = 0; p < pieces.size(); ++p) {
       const VtuGrid &piece = pieces[p];
       bool sameFields = piece.fields.size() == pieces[0].fields.size();
@@ -793,11 +904,13 @@ private:
         fail(positions[p], "this <Piece> has other data arrays than the first one");
       pointCount += piece.points.size();
       cellCount += piece.types.size();
+      grid.polyhedra.polyhedra += piece.polyhedra.polyhedra;
+      grid.polyhedra.tets += piece.polyhedra.tets;
+      grid.polyhedra.pyramids += piece.polyhedra.pyramids;
       connectivityCount += piece.connectivity.size();
     }
     if (pointCount > NarrowPointIndex::kOutside)
       throw Error(path_, "", "more than 2^32 points are not supported"); // as buildMesh says
-    VtuGrid grid;
     grid.offsets = Buffer<int64_t>(cellCount + 1);
     grid.offsets[0] = 0;
     grid.connectivity = Buffer<uint32_t>(connectivityCount);
@@ -844,14 +957,18 @@ UnstructuredGrid readVtu(const std::string &path) {
           {grid.offsets.begin(), grid.offsets.end()},
           {grid.connectivity.begin(), grid.connectivity.end()},
           {grid.types.begin(), grid.types.end()},
-          std::move(grid.fields)};
+          std::move(grid.fields),
+          grid.polyhedra};
 }
 
 Mesh loadVtu(const std::string &path) {
   VtuGrid grid = VtuReader(path).read();
-  return buildMesh(std::move(grid.points),
-                   CellBuffers{std::move(grid.offsets), std::move(grid.connectivity), std::move(grid.types)},
-                   std::move(grid.fields), path);
+  Mesh mesh =
+      buildMesh(std::move(grid.points),
+                CellBuffers{std::move(grid.offsets), std::move(grid.connectivity), std::move(grid.types)},
+                std::move(grid.fields), path);
+  mesh.polyhedra = grid.polyhedra;
+  return mesh;
 }
 
 } // namespace uvr

@@ -12,7 +12,9 @@
 #include <atomic>
 #include <cmath>
 #include <functional>
+#include <optional>
 #include <string>
+#include <string_view>
 #include <utility>
 
 namespace uvr {
@@ -198,10 +200,22 @@ Box3f Mesh::bounds() const {
 }
 
 int Mesh::findField(const std::string &name) const {
-  for (size_t i = 0; i < fields.size(); ++i)
-    if (fields[i].name == name)
-      return int(i);
-  return -1;
+  auto first = [&](std::string_view wanted, std::optional<Centering> centering) {
+    for (size_t i = 0; i < fields.size(); ++i)
+      if (fields[i].name == wanted && (!centering || fields[i].centering == *centering))
+        return int(i);
+    return -1;
+  };
+  // "point:p" and "cell:p" say which of two fields named p; a field whose own name has that prefix is found
+  // when no field of that centring is.
+  for (auto [prefix, centering] : {std::pair{std::string_view("point:"), Centering::Point},
+                                   std::pair{std::string_view("cell:"), Centering::Cell}})
+    if (name.starts_with(prefix))
+      if (const int index = first(std::string_view(name).substr(prefix.size()), centering); index >= 0)
+        return index;
+  // A plain name: the point field where a file has both, whatever order its format lists them in.
+  const int point = first(name, Centering::Point);
+  return point >= 0 ? point : first(name, std::nullopt);
 }
 
 namespace {
@@ -490,8 +504,10 @@ int backToBackSlot(const CellArrays<uint32_t> &grid) {
 } // namespace
 
 Mesh buildMesh(UnstructuredGrid &&grid, const std::string &source) {
-  return buildMesh(std::move(grid.points), CellArraysView{grid.offsets, grid.connectivity, grid.types},
-                   std::move(grid.fields), source);
+  Mesh mesh = buildMesh(std::move(grid.points), CellArraysView{grid.offsets, grid.connectivity, grid.types},
+                        std::move(grid.fields), source);
+  mesh.polyhedra = grid.polyhedra;
+  return mesh;
 }
 
 Mesh buildMesh(UninitVector<Vec3f> &&points, CellArraysView cells, std::vector<ScalarField> &&fields,

@@ -20,6 +20,11 @@ struct ScalarField {
   UninitVector<float> values;
 };
 
+/// Polyhedra of a file (VTK type 42) and the tetrahedra and pyramids they were decomposed into on load.
+struct PolyhedronCounts {
+  uint64_t polyhedra = 0, tets = 0, pyramids = 0;
+};
+
 /// Cells exactly as VTK files store them (offsets + connectivity + type codes): what every reader produces.
 struct UnstructuredGrid {
   UninitVector<Vec3f> points;
@@ -27,6 +32,7 @@ struct UnstructuredGrid {
   std::vector<int64_t> connectivity;
   std::vector<uint8_t> types; ///< VTK cell type codes, any dimension
   std::vector<ScalarField> fields;
+  PolyhedronCounts polyhedra; ///< already decomposed (see mesh/polyhedra.h): no cell here is of type 42
 };
 
 /// Number of vertices of a volume cell type; 0 for any other VTK type code.
@@ -46,6 +52,7 @@ struct Mesh {
 
   uint64_t skippedCells = 0;  ///< lower-dimensional cells of the file that were not kept
   uint64_t invertedCells = 0; ///< cells whose winding was reversed on construction
+  PolyhedronCounts polyhedra; ///< the file's polyhedra, whose pieces are among the tets and pyramids
 
   uint64_t tetCount() const { return tets.size() / 4; }
   uint64_t pyramidCount() const { return pyramids.size() / 5; }
@@ -54,7 +61,8 @@ struct Mesh {
   uint64_t cellCount() const { return tetCount() + pyramidCount() + wedgeCount() + hexCount(); }
 
   Box3f bounds() const;
-  /// Index into `fields`, or -1.
+  /// Index into `fields`, or -1. `name` may say the centring, "point:p" or "cell:p"; a plain name where a
+  /// point and a cell field share it finds the point field.
   int findField(const std::string &name) const;
 };
 
