@@ -53,7 +53,8 @@ struct FrameResult {
 /// Renders one field of a mesh. Built lazily, per backend, where it is first needed (prepare): tet
 /// adjacency, point-location hierarchy, occupancy and seed grids, and the partitions whose per-partition
 /// opacity and colour variance each transfer-function change recomputes (in time independent of the cell
-/// count). Not thread-safe: use one from one thread at a time.
+/// count). Safe to share between threads: transfer-function changes, preparation and frames are serialised
+/// (a caller wanting its own transfer function in a frame sets it and renders under its own lock).
 class VolumeRenderer {
 public:
   /// Renders field `fieldIndex` of `mesh` (see VolumeMesh::chooseField) in partitions of at most `leafSize`
@@ -79,7 +80,8 @@ public:
   void prepare(Backend backend);
 
   /// Draws a frame: one ray per pixel through its centre. Throws uvr::Error for invalid sampling settings
-  /// or size, a camera whose view direction and view-up are collinear, or no transfer function yet.
+  /// or size, a frame whose buffers would pass the memory limit (<uvr/system.h>), a camera whose view
+  /// direction and view-up are collinear, or no transfer function yet.
   FrameResult render(const Camera &camera, const FrameSettings &settings);
   /// The same into `frame`, whose buffers are reused when their size matches (no allocation per frame).
   void render(const Camera &camera, const FrameSettings &settings, FrameResult &frame);

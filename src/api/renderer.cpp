@@ -1,10 +1,15 @@
 #include "engine/renderer.h"
 #include "api/access.h"
+#include "core/limits.h"
 #include <uvr/error.h>
 
 #include <uvr/renderer.h>
 #include <uvr/system.h>
 
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <mutex>
 #include <optional>
 
 namespace uvr {
@@ -16,6 +21,16 @@ bool sameColorMap(const ColorMap &a, const ColorMap &b) {
          a.nanColor.x == b.nanColor.x && a.nanColor.y == b.nanColor.y && a.nanColor.z == b.nanColor.z;
 }
 
+std::string numberText(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%g", value);
+  return text;
+}
+
+/// What a frame may allocate per pixel, for the memory limit: the library's colour, opacity and sample
+/// buffers, and the copies the front ends make of them (RGBA, PNG rows, heat map).
+constexpr uint64_t kFrameBytesPerPixel = 32;
+
 } // namespace
 
 struct VolumeRenderer::Impl {
@@ -24,13 +39,22 @@ struct VolumeRenderer::Impl {
   Renderer renderer;
   std::optional<ColorMap> map; // the transfer function set last, and its range
   ValueRange range;
+  // Serialises building, transfer-function changes and frames: the backends are made lazily and the
+  // partitions' metadata is replaced in place, so neither may race a frame.
+  std::mutex mutex;
 
   Impl(VolumeMesh handle, int field, uint32_t leafSize)
       : mesh(std::move(handle)), fieldIndex(field), renderer(detail::Access::mesh(mesh), field, leafSize) {}
 };
 
 VolumeRenderer::VolumeRenderer(VolumeMesh mesh, int fieldIndex, uint32_t leafSize)
-    : impl_(std::make_unique<Impl>(std::move(mesh), fieldIndex, leafSize)) {}
+    : impl_(std::make_unique<Impl>(std::move(mesh), fieldIndex, leafSize)) {
+  // Said of the data here, before a default camera or step built from it is refused in other words.
+  const VolumeMesh &m = impl_->mesh;
+  const Box3f b = m.bounds();
+  if (m.cellCount() > 0 && b.lower.x == b.upper.x && b.lower.y == b.upper.y && b.lower.z == b.upper.z)
+    throw Error(m.source(), "", "the mesh has zero extent: all its points coincide");
+}
 
 VolumeRenderer::~VolumeRenderer() = default;
 VolumeRenderer::VolumeRenderer(VolumeRenderer &&) noexcept = default;
@@ -41,6 +65,14 @@ int VolumeRenderer::fieldIndex() const { return impl_->fieldIndex; }
 uint32_t VolumeRenderer::leafSize() const { return impl_->renderer.leafSize(); }
 
 void VolumeRenderer::setTransferFunction(const ColorMap &map, ValueRange range) {
+  if (!std::isfinite(range.min) || !std::isfinite(range.max))
+    throw Error("the transfer function's range must be finite");
+  // The transfer function maps values by (value - min) / (max - min) in float: a wider range overflows.
+  if (double(range.max) - double(range.min) > double(std::numeric_limits<float>::max()))
+    throw Error(impl_->mesh.source(), "",
+                "the value range [" + numberText(range.min) + ", " + numberText(range.max) +
+                    "] is wider than float arithmetic can span; give a narrower range (--range)");
+  const std::lock_guard<std::mutex> lock(impl_->mutex);
   if (impl_->map && sameColorMap(*impl_->map, map) && impl_->range.min == range.min &&
       impl_->range.max == range.max)
     return;
@@ -49,7 +81,10 @@ void VolumeRenderer::setTransferFunction(const ColorMap &map, ValueRange range) 
   impl_->range = range;
 }
 
-void VolumeRenderer::prepare(Backend backend) { impl_->renderer.prepare(backend); }
+void VolumeRenderer::prepare(Backend backend) {
+  const std::lock_guard<std::mutex> lock(impl_->mutex);
+  impl_->renderer.prepare(backend);
+}
 
 FrameResult VolumeRenderer::render(const Camera &camera, const FrameSettings &settings) {
   FrameResult frame;
@@ -60,9 +95,19 @@ FrameResult VolumeRenderer::render(const Camera &camera, const FrameSettings &se
 void VolumeRenderer::render(const Camera &camera, const FrameSettings &settings, FrameResult &result) {
   if (length(cross(camera.at - camera.eye, camera.up)) == 0.f)
     throw Error("the camera's view direction and view-up are collinear");
+  if (settings.width > 0 && settings.height > 0)
+    checkMemoryLimit("", "", uint64_t(settings.width) * uint64_t(settings.height) * kFrameBytesPerPixel,
+                     "a " + std::to_string(settings.width) + "x" + std::to_string(settings.height) +
+                         " frame");
   // The mesh's default step costs a pass over its cells, once: only where a setting asks for it.
   const bool defaults = !(settings.s1 > 0.f && settings.s2 > 0.f && settings.p > 0.f && settings.unit > 0.f);
-  const FrameSettings s = defaults ? withDefaultSampling(settings, impl_->mesh.defaultStep()) : settings;
+  const float step = defaults ? impl_->mesh.defaultStep() : 0.f;
+  if (defaults && !(step > 0.f && std::isfinite(step)) && !(settings.s1 > 0.f && settings.unit > 0.f))
+    throw Error(impl_->mesh.source(), "",
+                "no default step: the median cell volume is 0 (at least half of the cells are degenerate); "
+                "give a step (s1) and opacity unit");
+  const FrameSettings s = defaults ? withDefaultSampling(settings, step) : settings;
+  const std::lock_guard<std::mutex> lock(impl_->mutex);
   RenderSettings internal;
   internal.integrator.mode = s.mode;
   internal.integrator.s1 = s.s1;
