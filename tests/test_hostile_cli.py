@@ -99,7 +99,7 @@ def main():
         # uvr gen on a NIfTI with a NaN in its sform.
         nii = os.path.join(tmp, "nan.nii")
         nifti(nii, [1, 0, 0, 0, 0, float("nan"), 0, 0, 0, 0, 1, 0])
-        expect_error(uvr, ["gen", nii, "--cells", "100", "-o", os.path.join(tmp, "nan.vtu")],
+        expect_error(uvr, ["gen", nii, "--cells", "1000", "-o", os.path.join(tmp, "nan.vtu")],
                      "finite voxel-to-world map")
         if os.path.exists(os.path.join(tmp, "nan.vtu")):
             failures.append("uvr gen wrote a mesh from a NaN affine")

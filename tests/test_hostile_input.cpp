@@ -17,6 +17,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -158,7 +159,7 @@ TEST_F(Hostile, CollectionNamingItselfOrAnotherIsRefused) {
         "<VTKFile type=\"Collection\"><Collection><DataSet file=\"./a.PVD\"/></Collection></VTKFile>");
   EXPECT_NE(errorOf([&] { loadMesh(path("a.pvd")); }).find("names another collection"), std::string::npos);
   // A pattern that matches a collection is not followed either.
-  EXPECT_NE(errorOf([&] { loadMesh(path("?.pvd")); }).find("cannot hold a collection"), std::string::npos);
+  EXPECT_NE(errorOf([&] { loadMesh(path("*")); }).find("cannot hold a collection"), std::string::npos);
 }
 
 TEST_F(Hostile, CollectionFileNamesAreNoPatterns) {

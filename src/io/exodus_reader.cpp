@@ -454,7 +454,8 @@ private:
         xyz[d] = float(axes[size_t(d)][i]);
         if (!std::isfinite(xyz[d]))
           fail(std::string("variable '") + (separate ? axisNames[d] : "coord") + "'",
-               "coordinate of node " + std::to_string(i + 1) + " is not finite");
+               "coordinate of node " + std::to_string(i + 1) +
+                   (std::isfinite(axes[size_t(d)][i]) ? " is out of float range" : " is not finite"));
       }
       grid.points[i] = {xyz[0], xyz[1], xyz[2]};
     }
