@@ -5,6 +5,7 @@
 
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 
 namespace {
@@ -17,6 +18,8 @@ const char *kTetVtu =
 <DataArray type="Int64" Name="offsets" format="ascii">4</DataArray>
 <DataArray type="UInt8" Name="types" format="ascii">10</DataArray></Cells></Piece></UnstructuredGrid></VTKFile>)";
 
+std::string made; // removed at exit: nothing left behind
+
 /// The directory the collection lives in, made once: a.vtu, b.vtu, and in.pvd linked to the input.
 const std::string &directory(const std::string &input) {
   static const std::string dir = [&] {
@@ -28,6 +31,8 @@ const std::string &directory(const std::string &input) {
     std::ofstream(d + "/b.vtu") << kTetVtu;
     if (::symlink(input.c_str(), (d + "/in.pvd").c_str()) != 0)
       std::abort();
+    made = d;
+    std::atexit([] { std::filesystem::remove_all(made); });
     return d;
   }();
   return dir;
