@@ -11,7 +11,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <deque>
 #include <memory>
+#include <mutex>
 #include <optional>
 
 namespace py = pybind11;
@@ -85,22 +87,36 @@ std::optional<std::pair<float, float>> checkRange(const std::optional<std::pair<
 
 py::tuple fromVec3(Vec3f v) { return py::make_tuple(v.x, v.y, v.z); }
 
-/// Arrays a mesh is built from, kept alive while the library reads them in place.
+/// Whether a numpy array holds numbers uvr can take: integers, or floats too when `floats`.
+bool numericArray(const py::array &array, bool floats) {
+  const char kind = array.dtype().kind();
+  return kind == 'i' || kind == 'u' || (floats && kind == 'f');
+}
+
+/// The values of `object` converted to T and copied, with the GIL held: the library reads only this copy
+/// with the GIL released, so another thread writing into the caller's array cannot change what was counted.
+template <class T> std::vector<T> copyOf(const py::array &object) {
+  const InArray<T> array = object;
+  return std::vector<T>(array.data(), array.data() + array.size());
+}
+
+/// Arrays a mesh is built from: private copies, which the library reads with the GIL released.
 struct PyArrays {
   MeshArrays arrays;
-  std::vector<py::array> owners;
+  std::deque<std::vector<float>> floats; // a deque: growing it moves none of the vectors viewed
+  std::deque<std::vector<double>> doubles;
 
-  /// float32 C-contiguous arrays are read in place; any other is converted to float64 once.
-  ArrayView view(const py::array &object, int components) {
-    if (py::isinstance<py::array_t<float>>(object) && (object.flags() & py::array::c_style)) {
-      owners.push_back(object);
-      return ArrayView(
-          std::span<const float>(static_cast<const float *>(object.data()), size_t(object.size())),
-          components);
+  /// float32 arrays are copied as they are; any other is converted to float64.
+  ArrayView view(const py::array &object, int components, const std::string &what) {
+    if (!numericArray(object, true))
+      throw Error("uvr.Mesh", "",
+                  what + " must hold numbers, not dtype " + std::string(py::str(object.dtype())));
+    if (py::isinstance<py::array_t<float>>(object)) {
+      const std::vector<float> &values = floats.emplace_back(copyOf<float>(object));
+      return ArrayView(std::span<const float>(values), components);
     }
-    const InArray<double> array = object;
-    owners.push_back(array);
-    return ArrayView(std::span<const double>(array.data(), size_t(array.size())), components);
+    const std::vector<double> &values = doubles.emplace_back(copyOf<double>(object));
+    return ArrayView(std::span<const double>(values), components);
   }
 
   /// One value per tuple: several components become their Euclidean magnitude, as the file readers do.
@@ -114,14 +130,28 @@ struct PyArrays {
       if (array.ndim() != 1 && array.ndim() != 2)
         throw Error("uvr.Mesh", "", "field '" + name + "' must have 1 or 2 dimensions");
       const int components = array.ndim() == 2 ? int(array.shape(1)) : 1;
-      arrays.fields.push_back({name, centering, view(array, components)});
+      arrays.fields.push_back({name, centering, view(array, components, "field '" + name + "'")});
     }
   }
 };
 
+/// An integer array's values as int64, copied; floats, strings and the like are refused, not truncated.
+std::vector<int64_t> integers(const py::array &object, const char *what) {
+  if (!numericArray(object, false))
+    throw Error("uvr.Mesh", "",
+                std::string(what) + " must hold integers, not dtype " + std::string(py::str(object.dtype())));
+  if (object.dtype().kind() == 'u' && object.itemsize() == 8) { // above 2^63 would wrap to negative
+    const InArray<uint64_t> wide = object;
+    for (py::ssize_t i = 0; i < wide.size(); ++i)
+      if (wide.data()[i] > uint64_t(INT64_MAX))
+        throw Error("uvr.Mesh", "", std::string(what) + " entry " + std::to_string(i) + " is out of range");
+  }
+  return copyOf<int64_t>(object);
+}
+
 /// Builds a mesh from VTK's arrays: `cells` is the flat [n, i0, i1, ...] layout, or the connectivity when
-/// `offsets` (cell count + 1 entries) are given. Points, fields, cells, types and offsets are read in place
-/// when they are contiguous float32 / int64 / uint8 arrays.
+/// `offsets` (cell count + 1 entries) are given. Every array is checked and copied with the GIL held; the
+/// library then checks the mesh as it does each file's (VolumeMesh::fromArrays).
 std::shared_ptr<PyMesh> makeMesh(const py::array &pointsArray, const py::array &cellsArray,
                                  const py::array &typesArray, const py::object &offsetsObject,
                                  const py::object &pointData, const py::object &cellData) {
@@ -129,23 +159,31 @@ std::shared_ptr<PyMesh> makeMesh(const py::array &pointsArray, const py::array &
   PyArrays in;
   if (pointsArray.ndim() != 2 || pointsArray.shape(1) != 3)
     throw Error(source, "", "points must have shape (n, 3)");
-  in.arrays.points = in.view(pointsArray, 3);
-  const InArray<int64_t> cells = cellsArray;
-  const InArray<uint8_t> types = typesArray;
-  if (cells.ndim() != 1 || types.ndim() != 1)
+  in.arrays.points = in.view(pointsArray, 3, "points");
+  if (cellsArray.ndim() != 1 || typesArray.ndim() != 1)
     throw Error(source, "", "cells and celltypes must be one-dimensional");
-  const size_t cellCount = size_t(types.shape(0));
+  const std::vector<int64_t> cellValues = integers(cellsArray, "cells");
+  const std::vector<int64_t> typeCodes = integers(typesArray, "celltypes");
+  const size_t cellCount = typeCodes.size();
+  std::vector<uint8_t> types(cellCount);
+  for (size_t c = 0; c < cellCount; ++c) {
+    if (typeCodes[c] < 0 || typeCodes[c] > 255) // a VTK type code is a byte: 266 must not wrap to 10
+      throw Error(source, "cell " + std::to_string(c),
+                  "cell type " + std::to_string(typeCodes[c]) + " is not a VTK type code");
+    types[c] = uint8_t(typeCodes[c]);
+  }
   in.addFields(Centering::Point, pointData);
   in.addFields(Centering::Cell, cellData);
 
   auto result = std::make_shared<PyMesh>();
-  const std::span<const int64_t> cellSpan(cells.data(), size_t(cells.shape(0)));
-  in.arrays.types = std::span<const uint8_t>(types.data(), cellCount);
+  const std::span<const int64_t> cellSpan(cellValues);
+  in.arrays.types = types;
   if (!offsetsObject.is_none()) {
-    const InArray<int64_t> offsets = py::cast<py::array>(offsetsObject);
-    if (offsets.ndim() != 1 || size_t(offsets.shape(0)) != cellCount + 1)
+    const py::array offsetsArray = py::cast<py::array>(offsetsObject);
+    if (offsetsArray.ndim() != 1 || size_t(offsetsArray.shape(0)) != cellCount + 1)
       throw Error(source, "", "offsets must have one entry more than celltypes (VTK 9's layout)");
-    in.arrays.offsets = std::span<const int64_t>(offsets.data(), cellCount + 1);
+    const std::vector<int64_t> offsets = integers(offsetsArray, "offsets");
+    in.arrays.offsets = offsets;
     in.arrays.connectivity = cellSpan;
     py::gil_scoped_release release;
     result->mesh = VolumeMesh::fromArrays(in.arrays, source);
@@ -258,6 +296,12 @@ PyTransferFunction transferFunctionFromArrays(const py::array &colorsObject,
                                   {row[0], row[1], full ? row[2] : 0.5f, full ? row[3] : 0.f});
     }
   }
+  for (const float v : tf.map.rgbPoints)
+    if (!std::isfinite(v))
+      throw Error("uvr.TransferFunction", "", "colors must be finite");
+  for (const float v : tf.map.opacityPoints)
+    if (!std::isfinite(v))
+      throw Error("uvr.TransferFunction", "", "opacities must be finite");
   tf.range = checkRange(range);
   return tf;
 }
@@ -351,6 +395,9 @@ public:
     FrameResult frame;
     {
       py::gil_scoped_release release;
+      // Taken without the GIL (a thread holding it waits for none), and held over the transfer function's
+      // change and the frame: another thread's function cannot slip in between.
+      const std::lock_guard<std::mutex> lock(frameMutex_);
       // A function already set changes nothing; a new one recomputes the partitions' metadata alone.
       renderer_->setTransferFunction(function.map, range);
       renderer_->prepare(backendKind_); // uploads the scene for CUDA once, outside the frame time
@@ -396,6 +443,7 @@ private:
   std::shared_ptr<PyMesh> mesh_;
   Backend backendKind_ = Backend::Cpu;
   std::unique_ptr<VolumeRenderer> renderer_;
+  std::mutex frameMutex_;
   nlohmann::json lastStats_;
   std::vector<uint32_t> lastSamples_;
   int width_ = 0, height_ = 0;

@@ -276,6 +276,17 @@ def vtu_cases(c):
     c.add("vtu_disk_zlib.vtu", bytes(broken), "zlib block 0 is corrupt")
 
 
+# ParaView collections: no nesting, so no recursion (a collection naming itself, or two naming each other).
+
+def collection_cases(c):
+    def collection(*files):
+        sets = "".join(f'<DataSet timestep="0" file="{f}"/>' for f in files)
+        return f'<?xml version="1.0"?>\n<VTKFile type="Collection"><Collection>{sets}</Collection></VTKFile>\n'.encode()
+    c.add("pvd_self.pvd", collection("pvd_self.pvd"), "names another collection 'pvd_self.pvd'")
+    c.add("pvd_cycle_a.pvd", collection("pvd_cycle_b.pvd"), "names another collection 'pvd_cycle_b.pvd'")
+    c.add("pvd_cycle_b.pvd", collection("pvd_cycle_a.pvd"), "names another collection 'pvd_cycle_a.pvd'")
+
+
 # Exodus II (netCDF).
 
 def exodus_cases(c, ncgen):
@@ -330,6 +341,7 @@ def generate(shared, out, ncgen=None):
     c = Corpus(shared, out)
     legacy_cases(c)
     vtu_cases(c)
+    collection_cases(c)
     ncgen = ncgen or shutil.which("ncgen")
     if ncgen:
         exodus_cases(c, ncgen)

@@ -2,6 +2,7 @@
 #include "commands.h"
 
 #include <uvr/error.h>
+#include <uvr/system.h>
 
 #include <cstdio>
 #include <new>
@@ -15,6 +16,11 @@ int main(int argc, char **argv) {
   uvr::addConvertCommand(app);
   uvr::addViewCommand(app);
   uvr::addGenCommand(app);
+  // Every command reads input that may claim far more memory than it holds (docs/cli.md, "Memory limit").
+  for (CLI::App *command : app.get_subcommands({}))
+    command->add_option_function<std::string>(
+        "--memory-limit", [](const std::string &text) { uvr::setMemoryLimit(uvr::parseByteSize(text)); },
+        "Most memory that input may claim: bytes, or with K, M, G, T (default 4G, or $UVR_MEMORY_LIMIT)");
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError &e) {

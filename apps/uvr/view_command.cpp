@@ -46,7 +46,8 @@ void runView(const ViewCommandOptions &o) {
   setup.camera = chooseCamera(o.view, loaded.mesh);
   setup.settings = withDefaultSampling(settings, setup.defaultStep, setup.defaultUnit);
   setup.colorMap = colorMap;
-  if (!o.view.tf.empty() && std::filesystem::exists(o.view.tf))
+  std::error_code tfError; // exists() without it throws for e.g. a name too long
+  if (!o.view.tf.empty() && std::filesystem::exists(o.view.tf, tfError))
     setup.presets = readColorMapPresets(o.view.tf);
   setup.range = transferRange(o.view, loaded.mesh, loaded.fieldIndex);
   setup.script = o.script;

@@ -53,15 +53,16 @@ struct FrameResult {
   FrameStats stats;
 };
 
-/// Renders one field of a mesh. Built lazily, per backend, where it is first needed (prepare): tet
-/// adjacency, point-location hierarchy, occupancy and seed grids, and the partitions whose per-partition
-/// opacity and colour variance each transfer-function change recomputes (in time independent of the cell
-/// count). Not thread-safe: use one from one thread at a time.
 /// The range a transfer function spans over a field of range `fieldRange` by default: that range, or for a
 /// constant field (min == max, or no finite values: {0, 0}) one of width max(1, |value| / 1000) centred on
 /// the value, so that the field shows in the preset's middle colour rather than at its transparent end.
 ValueRange defaultTransferRange(ValueRange fieldRange);
 
+/// Renders one field of a mesh. Built lazily, per backend, where it is first needed (prepare): tet
+/// adjacency, point-location hierarchy, occupancy and seed grids, and the partitions whose per-partition
+/// opacity and colour variance each transfer-function change recomputes (in time independent of the cell
+/// count). Safe to share between threads: transfer-function changes, preparation and frames are serialised
+/// (a caller wanting its own transfer function in a frame sets it and renders under its own lock).
 class VolumeRenderer {
 public:
   /// Renders field `fieldIndex` of `mesh` (see VolumeMesh::chooseField) in partitions of at most `leafSize`
@@ -88,9 +89,10 @@ public:
   void prepare(Backend backend);
 
   /// Draws a frame: one ray per pixel through its centre. Throws uvr::Error for invalid settings
-  /// (validateSettings), a degenerate camera (validateCamera), or no transfer function yet. Prepares the
-  /// backend where it is not. The frame's tfUpdateMs is the transfer-function update since the last frame
-  /// (0 when unchanged); buildMs is the backend's acceleration build, whenever it was done.
+  /// (validateSettings), a degenerate camera (validateCamera), a frame whose buffers would pass the memory
+  /// limit (<uvr/system.h>), or no transfer function yet. Prepares the backend where it is not. The frame's
+  /// tfUpdateMs is the transfer-function update since the last frame (0 when unchanged); buildMs is the
+  /// backend's acceleration build, whenever it was done.
   FrameResult render(const Camera &camera, const FrameSettings &settings);
   /// The same into `frame`, whose buffers are reused when their size matches (no allocation per frame).
   void render(const Camera &camera, const FrameSettings &settings, FrameResult &frame);

@@ -2,11 +2,22 @@
 #pragma once
 
 #include <chrono>
+#include <cstdint>
+#include <string>
 
 namespace uvr {
 
 /// The threads the library's parallel loops use (all cores unless the process limits them).
 int threadCount();
+
+/// The memory limit in bytes: what the library lets input inflate to (decompressed arrays, values a file
+/// declares but does not hold, frame buffers) before refusing it with uvr::Error. The default is 4 GiB, or
+/// the environment variable UVR_MEMORY_LIMIT (bytes, or with a K, M, G or T suffix) when set.
+uint64_t memoryLimit();
+/// Replaces the memory limit for the whole process (0: back to the default).
+void setMemoryLimit(uint64_t bytes);
+/// Parses a size such as 4096, 512M or 8G (binary units); throws uvr::Error naming `text` when malformed.
+uint64_t parseByteSize(const std::string &text);
 
 /// Wall-clock timing in milliseconds.
 class Timer {

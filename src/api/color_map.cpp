@@ -9,8 +9,13 @@ namespace uvr {
 ColorMap chooseColorMap(const std::string &tf, const std::string &tfName) {
   if (tf.empty())
     return builtinColorMap(builtinColorMapNames().front());
-  if (std::filesystem::exists(tf))
+  // Without an error code, exists() throws std::filesystem_error for e.g. a name too long.
+  std::error_code error;
+  const bool exists = std::filesystem::exists(tf, error);
+  if (exists)
     return readColorMapFile(tf, tfName);
+  if (error && error != std::errc::no_such_file_or_directory)
+    throw Error(tf, "", "cannot open transfer-function file: " + error.message());
   if (tf.size() > 5 && tf.substr(tf.size() - 5) == ".json")
     throw Error(tf, "", "cannot open transfer-function file");
   return builtinColorMap(tf);

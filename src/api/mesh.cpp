@@ -7,6 +7,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <filesystem>
+#include <limits>
 
 namespace uvr {
 
@@ -46,9 +48,12 @@ UninitVector<Vec3f> toPoints(const ArrayView &v, const std::string &source) {
     return points;
   }
   const double *p = static_cast<const double *>(v.data);
+  for (size_t i = 0; i < 3 * points.size(); ++i)
+    if (std::isfinite(p[i]) && std::fabs(p[i]) > double(std::numeric_limits<float>::max()))
+      throw Error(source, "point " + std::to_string(i / 3), "a coordinate is out of float range");
   for (size_t i = 0; i < points.size(); ++i)
     points[i] = {float(p[3 * i]), float(p[3 * i + 1]), float(p[3 * i + 2])};
-  return points;
+  return points; // buildMesh refuses those not finite, as it does for every reader
 }
 
 const ScalarField &fieldAt(const Mesh &mesh, const std::string &source, int index) {
@@ -71,7 +76,11 @@ VolumeMesh::VolumeMesh() : impl_(std::make_shared<Impl>()) {}
 VolumeMesh::VolumeMesh(std::shared_ptr<Impl> impl) : impl_(std::move(impl)) {}
 
 VolumeMesh VolumeMesh::load(const std::string &path, const LoadOptions &options) {
-  return detail::Access::make(loadMesh(path, options), path);
+  try {
+    return detail::Access::make(loadMesh(path, options), path);
+  } catch (const std::filesystem::filesystem_error &e) { // e.g. a name too long, a directory unreadable
+    throw Error(path, "", std::string("cannot read: ") + e.code().message());
+  }
 }
 
 VolumeMesh VolumeMesh::fromArrays(const MeshArrays &arrays, const std::string &source) {

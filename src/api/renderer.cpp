@@ -1,5 +1,6 @@
 #include "engine/renderer.h"
 #include "api/access.h"
+#include "core/limits.h"
 #include <uvr/error.h>
 
 #include <uvr/renderer.h>
@@ -7,6 +8,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <limits>
+#include <mutex>
 #include <optional>
 #include <sstream>
 
@@ -18,6 +22,16 @@ bool sameColorMap(const ColorMap &a, const ColorMap &b) {
   return a.rgbPoints == b.rgbPoints && a.opacityPoints == b.opacityPoints && a.colorSpace == b.colorSpace &&
          a.nanColor.x == b.nanColor.x && a.nanColor.y == b.nanColor.y && a.nanColor.z == b.nanColor.z;
 }
+
+std::string numberText(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%g", value);
+  return text;
+}
+
+/// What a frame may allocate per pixel, for the memory limit: the library's colour, opacity and sample
+/// buffers, and the copies the front ends make of them (RGBA, PNG rows, heat map).
+constexpr uint64_t kFrameBytesPerPixel = 32;
 
 } // namespace
 
@@ -39,6 +53,24 @@ struct VolumeRenderer::Impl {
   double tfUpdateMs = 0.0;
   bool tfTimed = false;   // tfUpdateMs holds an update on a backend
   bool tfPending = false; // set, but no backend has taken it yet
+  // Serialises building, transfer-function changes and frames: the backends are made lazily and the
+  // partitions' metadata is replaced in place, so neither may race a frame.
+  std::mutex mutex;
+
+  /// VolumeRenderer::prepare, with the mutex held.
+  void prepare(Backend backend) {
+    if (renderer.prepared(backend))
+      return;
+    renderer.prepare(backend);
+    if (tfPending && map) {
+      // The new backend took the function in its build; time its update alone, as a change would be timed.
+      const Timer timer;
+      renderer.setTransferFunction(TransferFunction(*map, range.min, range.max));
+      tfUpdateMs = timer.milliseconds();
+      tfTimed = true;
+      tfPending = false;
+    }
+  }
 
   Impl(VolumeMesh handle, int field, uint32_t leafSize)
       : mesh(std::move(handle)), fieldIndex(field), renderer(detail::Access::mesh(mesh), field, leafSize) {}
@@ -62,6 +94,12 @@ void VolumeRenderer::setTransferFunction(const ColorMap &map, ValueRange range) 
          << "]: the low end must be below the high end, both finite";
     throw Error(text.str());
   }
+  // The transfer function maps values by (value - min) / (max - min) in float: a wider range overflows.
+  if (double(range.max) - double(range.min) > double(std::numeric_limits<float>::max()))
+    throw Error(impl_->mesh.source(), "",
+                "the value range [" + numberText(range.min) + ", " + numberText(range.max) +
+                    "] is wider than float arithmetic can span; give a narrower range (--range)");
+  const std::lock_guard<std::mutex> lock(impl_->mutex);
   if (impl_->map && sameColorMap(*impl_->map, map) && impl_->range.min == range.min &&
       impl_->range.max == range.max)
     return;
@@ -76,18 +114,8 @@ void VolumeRenderer::setTransferFunction(const ColorMap &map, ValueRange range) 
 }
 
 void VolumeRenderer::prepare(Backend backend) {
-  Impl &d = *impl_;
-  if (d.renderer.prepared(backend))
-    return;
-  d.renderer.prepare(backend);
-  if (d.tfPending && d.map) {
-    // The new backend took the function in its build; time its update alone, as a change would be timed.
-    const Timer timer;
-    d.renderer.setTransferFunction(TransferFunction(*d.map, d.range.min, d.range.max));
-    d.tfUpdateMs = timer.milliseconds();
-    d.tfTimed = true;
-    d.tfPending = false;
-  }
+  const std::lock_guard<std::mutex> lock(impl_->mutex);
+  impl_->prepare(backend);
 }
 
 FrameResult VolumeRenderer::render(const Camera &camera, const FrameSettings &settings) {
@@ -99,8 +127,8 @@ FrameResult VolumeRenderer::render(const Camera &camera, const FrameSettings &se
 void VolumeRenderer::render(const Camera &camera, const FrameSettings &settings, FrameResult &result) {
   validateCamera(camera);
   validateSettings(settings);
-  if (!impl_->map)
-    throw Error("no transfer function set");
+  checkMemoryLimit("", "", uint64_t(settings.width) * uint64_t(settings.height) * kFrameBytesPerPixel,
+                   "a " + std::to_string(settings.width) + "x" + std::to_string(settings.height) + " frame");
   // The mesh's default step costs a pass over its cells, once: only where a setting asks for it.
   const bool defaults = !(settings.s1 > 0.f && settings.s2 > 0.f && settings.p > 0.f && settings.unit > 0.f);
   const VolumeMesh &mesh = impl_->mesh;
@@ -108,7 +136,10 @@ void VolumeRenderer::render(const Camera &camera, const FrameSettings &settings,
                                                          defaultUnitDistance(mesh.bounds(), mesh.cellCount()))
                                    : settings;
   validateSettings(s); // a given s2 below the default s1, say so by name
-  prepare(s.backend);
+  const std::lock_guard<std::mutex> lock(impl_->mutex);
+  if (!impl_->map)
+    throw Error("no transfer function set");
+  impl_->prepare(s.backend);
   RenderSettings internal;
   internal.integrator.mode = s.mode;
   internal.integrator.s1 = s.s1;

@@ -1,6 +1,7 @@
 // ParaView's colour-map preset files, read and written (declared in <uvr/color_map.h>).
 #include "core/color_map.h"
 
+#include "io/file_buffer.h"
 #include "io/text_scan.h"
 #include <uvr/error.h>
 
@@ -17,24 +18,45 @@ namespace {
 
 using Json = nlohmann::json;
 
+// The whole of ParaView's own preset collection is under 1 MB; anything far larger is not a preset file (and
+// a parsed JSON value takes many times its text).
+constexpr uint64_t kMaxPresetBytes = 16u << 20;
+// ParaView's presets nest 3 levels deep; a parser recursing once per level must not meet 10^7 of them.
+constexpr int kMaxJsonDepth = 64;
+
 std::string readSmallFile(const std::string &path) {
-  // The whole of ParaView's own preset collection is under 1 MB; anything far larger is not a preset file.
-  constexpr std::uintmax_t maxBytes = 64u << 20;
-  std::error_code error;
-  if (!std::filesystem::exists(path, error))
-    throw Error(path, "", "no such file");
-  if (!std::filesystem::is_regular_file(path, error))
-    throw Error(path, "", "not a regular file");
-  const std::uintmax_t size = std::filesystem::file_size(path, error);
-  if (error)
-    throw Error(path, "", "cannot get the file size: " + error.message());
-  if (size > maxBytes)
-    throw Error(path, "", "is " + std::to_string(size) + " bytes, too large for a colour-map preset file");
-  std::ifstream in(path, std::ios::binary);
-  std::string text(size, '\0');
-  if (!in || !in.read(text.data(), static_cast<std::streamsize>(size)))
-    throw Error(path, "", "cannot read the file");
+  const InputFile input(path); // refuses what is not a regular file before opening it
+  if (input.size() > kMaxPresetBytes)
+    throw Error(path, "",
+                "is " + std::to_string(input.size()) +
+                    " bytes, too large for a colour-map preset file (at most " +
+                    std::to_string(kMaxPresetBytes) + ")");
+  std::string text(size_t(input.size()), '\0');
+  input.read(0, text.data(), input.size());
   return text;
+}
+
+/// Fails at the first bracket nested deeper than kMaxJsonDepth, outside strings: before parsing.
+void checkJsonDepth(const std::string &text, const std::string &path) {
+  int depth = 0;
+  bool inString = false;
+  for (size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (inString) {
+      if (c == '\\')
+        ++i;
+      else if (c == '"')
+        inString = false;
+    } else if (c == '"') {
+      inString = true;
+    } else if (c == '[' || c == '{') {
+      if (++depth > kMaxJsonDepth)
+        throw Error(path, "byte " + std::to_string(i),
+                    "invalid JSON: nested more than " + std::to_string(kMaxJsonDepth) + " levels deep");
+    } else if (c == ']' || c == '}') {
+      --depth;
+    }
+  }
 }
 
 // nlohmann's message without its "[json.exception.parse_error.101] " tag.
@@ -47,6 +69,7 @@ std::string jsonMessage(const Json::exception &e) {
 
 Json parseJsonFile(const std::string &path) {
   const std::string text = readSmallFile(path);
+  checkJsonDepth(text, path);
   try {
     return Json::parse(text);
   } catch (const Json::parse_error &e) {

@@ -4,6 +4,7 @@
 // first, as VTK does), NFACED blocks (polyhedra over NSIDED face blocks) decomposed as .vtu polyhedra are;
 // other blocks are skipped. Nodal variables become point fields and element variables,
 // stored per block, become one cell field over all kept blocks (NaN in blocks that lack the variable).
+#include "core/limits.h"
 #include "io/mesh_io.h"
 #include <uvr/error.h>
 
@@ -352,11 +353,20 @@ private:
     fail(v.position, "has shape " + text(v.shape) + ", expected " + text(expected));
   }
 
-  /// Fails unless `count` values could be stored in this file: called before allocating for them.
-  void checkRoom(const Variable &v, uint64_t count) const {
-    if (count / compressionLimit_ > fileSize_)
-      fail(v.position, std::to_string(count) + " values declared but the file is only " +
+  /// Fails unless `count` values more could be stored in this file, with all those read before (netCDF-4
+  /// fills unwritten values in: a small file may declare any number), and fit in the memory limit: called
+  /// before allocating for them.
+  void checkRoom(const Variable &v, uint64_t count) {
+    uint64_t total = 0, bytes = 0;
+    if (__builtin_add_overflow(valuesClaimed_, count, &total) || total / compressionLimit_ > fileSize_)
+      fail(v.position, std::to_string(count) + " values declared (" + std::to_string(total) +
+                           " with the variables read before) but the file is only " +
                            std::to_string(fileSize_) + " bytes");
+    if (__builtin_mul_overflow(total, uint64_t(sizeof(double)), &bytes))
+      bytes = UINT64_MAX;
+    if (bytes > fileSize_)
+      checkMemoryLimit(path_, v.position, bytes, "its values with those read before");
+    valuesClaimed_ = total;
   }
 
   /// The hyperslab of `v` at `start` with `count` values per dimension, converted to T.
@@ -451,7 +461,8 @@ private:
         xyz[d] = float(axes[size_t(d)][i]);
         if (!std::isfinite(xyz[d]))
           fail(std::string("variable '") + (separate ? axisNames[d] : "coord") + "'",
-               "coordinate of node " + std::to_string(i + 1) + " is not finite");
+               "coordinate of node " + std::to_string(i + 1) +
+                   (std::isfinite(axes[size_t(d)][i]) ? " is out of float range" : " is not finite"));
       }
       grid.points[i] = {xyz[0], xyz[1], xyz[2]};
     }
@@ -631,6 +642,7 @@ private:
   int ncid_ = -1;
   uint64_t fileSize_ = 0;
   uint64_t compressionLimit_ = 1;
+  uint64_t valuesClaimed_ = 0;
   uint64_t timeSteps_ = 0;
   std::vector<std::string> variableNames_;
   PolyhedronFaces polyhedra_; ///< of the NFACED blocks

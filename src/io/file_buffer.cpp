@@ -14,8 +14,19 @@
 
 namespace uvr {
 
+void checkRegularFile(const std::string &path) {
+  struct stat info {};
+  if (::stat(path.c_str(), &info) != 0)
+    throw Error(path, "", std::string("cannot open file: ") + std::strerror(errno));
+  if (!S_ISREG(info.st_mode))
+    throw Error(path, "", "cannot open file: not a regular file");
+}
+
 InputFile::InputFile(const std::string &path) : path_(path) {
-  fd_ = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  // A FIFO or device would block open() itself: refused by stat first, and opened without blocking should
+  // one replace the file in between (fstat then refuses it).
+  checkRegularFile(path);
+  fd_ = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK);
   if (fd_ < 0)
     throw Error(path, "", std::string("cannot open file: ") + std::strerror(errno));
   struct stat info {};

@@ -56,6 +56,9 @@ private:
   uint64_t size_ = 0;
 };
 
+/// Throws uvr::Error naming `path` unless it is a regular file (stat alone: opening a FIFO would block).
+void checkRegularFile(const std::string &path);
+
 /// Reads a regular file; throws uvr::Error naming it when it cannot be opened or read.
 FileBuffer readFile(const std::string &path);
 

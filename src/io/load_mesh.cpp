@@ -1,3 +1,6 @@
+#include "core/limits.h"
+#include "io/file_buffer.h"
+#include "io/glob.h"
 #include "io/mesh_io.h"
 #include "io/text_scan.h"
 #include <uvr/error.h>
@@ -8,7 +11,7 @@
 #include <cctype>
 #include <charconv>
 #include <filesystem>
-#include <regex>
+#include <set>
 
 namespace uvr {
 
@@ -32,8 +35,10 @@ bool isExodus(const std::string &extension) {
 using Series = std::vector<std::vector<std::string>>;
 
 Series readPvd(const std::string &path) {
+  // Through readFile, which refuses what is not a regular file (a FIFO) before blocking on it.
+  FileBuffer file = readFile(path);
   pugi::xml_document doc;
-  const pugi::xml_parse_result result = doc.load_file(path.c_str());
+  const pugi::xml_parse_result result = doc.load_buffer_inplace(file.data.data(), file.size);
   if (!result)
     throw Error(path, "byte " + std::to_string(std::max<ptrdiff_t>(result.offset, 0)),
                 std::string("malformed XML: ") + result.description());
@@ -48,8 +53,13 @@ Series readPvd(const std::string &path) {
   const fs::path directory = fs::path(path).parent_path();
   for (pugi::xml_node node : collection.children("DataSet")) {
     const std::string file = node.attribute("file").value();
+    const std::string position = "byte " + std::to_string(node.offset_debug());
     if (file.empty())
-      throw Error(path, "byte " + std::to_string(node.offset_debug()), "<DataSet> without a file attribute");
+      throw Error(path, position, "<DataSet> without a file attribute");
+    // A collection names mesh files only: no nesting, so no recursion and no cycle (a .pvd naming itself).
+    if (lowerCaseExtension(file) == ".pvd")
+      throw Error(path, position,
+                  "<DataSet> names another collection '" + quoteInput(file) + "': it must name a mesh file");
     dataSets.push_back({node.attribute("timestep").as_double(0.0),
                         fs::path(file).is_absolute() ? file : (directory / file).string()});
   }
@@ -58,9 +68,16 @@ Series readPvd(const std::string &path) {
   std::stable_sort(dataSets.begin(), dataSets.end(),
                    [](const DataSet &a, const DataSet &b) { return a.time < b.time; });
   Series series;
+  std::set<std::string> stepFiles; // a file twice in one step would be merged with itself
   for (size_t i = 0; i < dataSets.size(); ++i) {
-    if (i == 0 || dataSets[i].time != dataSets[i - 1].time)
+    if (i == 0 || dataSets[i].time != dataSets[i - 1].time) {
       series.emplace_back();
+      stepFiles.clear();
+    }
+    if (!stepFiles.insert(fs::path(dataSets[i].file).lexically_normal().string()).second)
+      throw Error(path, "",
+                  "time step " + std::to_string(series.size() - 1) + " names '" +
+                      quoteInput(dataSets[i].file) + "' more than once");
     series.back().push_back(dataSets[i].file);
   }
   return series;
@@ -99,35 +116,13 @@ bool naturalLess(const std::string &a, const std::string &b) {
 /// Files matching a name pattern with %d, %0Nd, * or ?: a series of one file per step.
 Series readPattern(const std::string &path) {
   const fs::path pattern(path);
-  const std::string name = pattern.filename().string();
-  std::string expression;
-  for (size_t i = 0; i < name.size(); ++i) {
-    const char c = name[i];
-    if (c == '%') {
-      size_t j = i + 1;
-      while (j < name.size() && std::isdigit(static_cast<unsigned char>(name[j])))
-        ++j;
-      if (j < name.size() && name[j] == 'd') {
-        expression += "[0-9]+";
-        i = j;
-        continue;
-      }
-    }
-    if (c == '*')
-      expression += ".*";
-    else if (c == '?')
-      expression += ".";
-    else if (std::isalnum(static_cast<unsigned char>(c)))
-      expression += c;
-    else
-      expression += std::string("\\") + c;
-  }
-  const std::regex matcher(expression);
+  const NamePattern matcher(pattern.filename().string());
   const fs::path directory = pattern.has_parent_path() ? pattern.parent_path() : fs::path(".");
   std::error_code ec;
   std::vector<std::string> names;
+  std::error_code entryError; // an entry that cannot be examined is no match
   for (const fs::directory_entry &entry : fs::directory_iterator(directory, ec))
-    if (entry.is_regular_file() && std::regex_match(entry.path().filename().string(), matcher))
+    if (entry.is_regular_file(entryError) && matcher.matches(entry.path().filename().string()))
       names.push_back(entry.path().filename().string());
   if (ec)
     throw Error(path, "", "cannot list " + directory.string() + ": " + ec.message());
@@ -144,12 +139,15 @@ Series seriesOf(const std::string &path) {
   if (lowerCaseExtension(path) == ".pvd")
     return readPvd(path);
   const std::string name = fs::path(path).filename().string();
-  if (name.find_first_of("*?%") != std::string::npos && !fs::exists(path))
+  std::error_code ec;
+  if (name.find_first_of("*?%") != std::string::npos && !fs::exists(path, ec))
     return readPattern(path);
   return {};
 }
 
-UnstructuredGrid readGrid(const std::string &path, const LoadOptions &options, int *steps = nullptr) {
+/// `alone`: the file is read by itself, where .umesh and .pvd are accepted too (by loadMesh).
+UnstructuredGrid readGrid(const std::string &path, const LoadOptions &options, int *steps = nullptr,
+                          bool alone = true) {
   const std::string extension = lowerCaseExtension(path);
   if (extension == ".vtu")
     return readVtu(path);
@@ -159,16 +157,30 @@ UnstructuredGrid readGrid(const std::string &path, const LoadOptions &options, i
     return readGmsh(path, options, steps);
   if (isExodus(extension))
     return readExodus(path, options.timeStep);
+  if (!alone && (extension == ".umesh" || extension == ".pvd"))
+    throw Error(
+        path, "",
+        "a " + extension +
+            " file cannot be one of several parts of a time step: expected .vtu, .vtk, .msh, .e, .ex2, "
+            ".exo or .g");
   throw Error(path, "",
-              "unknown mesh format '" + extension +
-                  "': expected .vtu, .vtk, .msh, .e, .ex2, .exo, .g, .umesh or .pvd");
+              "unknown mesh format '" + quoteInput(extension) +
+                  "': expected .vtu, .vtk, .msh, .e, .ex2, .exo, " +
+                  (alone ? ".g, .umesh or .pvd" : "or .g"));
 }
 
 /// Concatenates the parts of one time step: point indices of later parts are shifted past earlier ones.
-UnstructuredGrid mergeParts(const std::vector<std::string> &files) {
-  UnstructuredGrid all = readGrid(files[0], {});
+UnstructuredGrid mergeParts(const std::vector<std::string> &files, const std::string &collection) {
+  UnstructuredGrid all = readGrid(files[0], {}, nullptr, false);
+  uint64_t bytes = 0;
   for (size_t f = 1; f < files.size(); ++f) {
-    UnstructuredGrid part = readGrid(files[f], {});
+    UnstructuredGrid part = readGrid(files[f], {}, nullptr, false);
+    // Each part is bounded by its own file; together they are bounded by the memory limit.
+    bytes += part.points.size() * sizeof(Vec3f) + part.offsets.size() * sizeof(int64_t) +
+             part.connectivity.size() * sizeof(int64_t) + part.types.size();
+    for (const ScalarField &field : part.fields)
+      bytes += field.values.size() * sizeof(float);
+    checkMemoryLimit(collection, "", 2 * bytes, "merging its first " + std::to_string(f + 1) + " parts");
     bool sameFields = part.fields.size() == all.fields.size();
     for (size_t i = 0; sameFields && i < all.fields.size(); ++i)
       sameFields =
@@ -193,6 +205,8 @@ UnstructuredGrid mergeParts(const std::vector<std::string> &files) {
   return all;
 }
 
+Mesh loadSingle(const std::string &path, const LoadOptions &options);
+
 } // namespace
 
 Mesh loadMesh(const std::string &path, const LoadOptions &options) {
@@ -203,10 +217,19 @@ Mesh loadMesh(const std::string &path, const LoadOptions &options) {
                   "time step " + std::to_string(options.timeStep) + " asked, the series has " +
                       std::to_string(series.size()) + " (0 to " + std::to_string(series.size() - 1) + ")");
     const std::vector<std::string> &files = series[size_t(options.timeStep)];
+    // A series' files are read as single files: their names are no patterns, and no collections.
     if (files.size() == 1)
-      return loadMesh(files[0]);
-    return buildMesh(mergeParts(files), path);
+      return loadSingle(files[0], {});
+    return buildMesh(mergeParts(files, path), path);
   }
+  return loadSingle(path, options);
+}
+
+namespace {
+
+Mesh loadSingle(const std::string &path, const LoadOptions &options) {
+  if (lowerCaseExtension(path) == ".pvd")
+    throw Error(path, "", "a series of files cannot hold a collection (.pvd)");
   if (lowerCaseExtension(path) == ".umesh") {
     if (options.timeStep != 0)
       throw Error(path, "", "time step " + std::to_string(options.timeStep) + " asked, the file has 1");
@@ -219,6 +242,8 @@ Mesh loadMesh(const std::string &path, const LoadOptions &options) {
     return loadVtu(path);
   return buildMesh(readGrid(path, options), path);
 }
+
+} // namespace
 
 int timeStepCount(const std::string &path) {
   const Series series = seriesOf(path);

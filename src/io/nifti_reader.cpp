@@ -1,5 +1,7 @@
 // NIfTI-1 and raw volume readers. Files are read through zlib, which passes plain files through, so a
 // gzip-compressed .nii.gz reads as a .nii does.
+#include "core/limits.h"
+#include "io/file_buffer.h"
 #include "io/scalar_type.h"
 #include "io/volume_io.h"
 #include <uvr/error.h>
@@ -26,6 +28,9 @@ constexpr uint64_t kMaxVoxels = uint64_t(1) << 34;
 class VolumeFile {
 public:
   explicit VolumeFile(const std::string &path) : path_(path) {
+    checkRegularFile(path); // gzopen would block on a FIFO
+    std::error_code error;
+    fileSize_ = std::filesystem::file_size(path, error);
     file_ = gzopen(path.c_str(), "rb");
     if (!file_)
       throw Error(path, "", "cannot open the file");
@@ -63,8 +68,17 @@ public:
   }
   uint64_t offset() const { return offset_; }
 
+  /// Fails before `bytes` more are read and `memory` bytes allocated for them unless the file can hold them:
+  /// a plain file as they are, a gzipped one inflating at most kMaxDeflateRatio:1.
+  void checkRoom(uint64_t bytes, uint64_t memory, const std::string &position) {
+    const uint64_t ratio = gzdirect(file_) ? 1 : kMaxDeflateRatio;
+    InflationBound(path_, fileSize_, ratio).claim(bytes, position, "the voxel data");
+    checkMemoryLimit(path_, position, memory, "the volume's voxels as floats");
+  }
+
 private:
   std::string path_;
+  uint64_t fileSize_ = 0;
   gzFile file_;
   uint64_t offset_ = 0;
 };
@@ -185,6 +199,14 @@ Volume readNifti(const std::string &path) {
     for (int r = 0; r < 3; ++r)
       m[r][r] = pixdim[r + 1] > 0 ? pixdim[r + 1] : 1.0;
   }
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 4; ++c)
+      if (!std::isfinite(m[r][c]))
+        throw Error(path,
+                    sformCode > 0   ? "byte 280"
+                    : qformCode > 0 ? "byte 256"
+                                    : "byte 76",
+                    "expected a finite voxel-to-world map (pixdim, qform or sform)");
   if (volume.worldDeterminant() == 0.0)
     throw Error(path, "byte 76", "expected a non-singular voxel-to-world map (pixdim, qform or sform)");
 
@@ -192,6 +214,8 @@ Volume readNifti(const std::string &path) {
   if (!(voxOffset >= kHeaderSize) || voxOffset > float(1 << 30))
     throw Error(path, "byte 108", "expected vox_offset of at least 348");
   file.skip(uint64_t(voxOffset) - file.offset(), "header extensions");
+  file.checkRoom(volume.voxelCount() * scalarSize(niftiType(i16(70), path)),
+                 volume.voxelCount() * sizeof(float), "byte 42");
   volume.values = readVoxels(file, niftiType(i16(70), path), swap, volume.voxelCount());
 
   const float slope = f32(112), intercept = f32(116);
@@ -209,8 +233,8 @@ Volume readRawVolume(const std::string &path, std::array<int64_t, 3> dims, Voxel
   for (int a = 0; a < 3; ++a) {
     if (dims[a] < 1)
       throw Error(path, "", "expected a positive voxel count on every axis");
-    if (!(spacing[a] > 0))
-      throw Error(path, "", "expected a positive voxel spacing on every axis");
+    if (!(spacing[a] > 0) || !std::isfinite(spacing[a]))
+      throw Error(path, "", "expected a positive, finite voxel spacing on every axis");
     volume.toWorld[a][a] = spacing[a];
   }
   if (volume.voxelCount() > kMaxVoxels)
@@ -220,6 +244,7 @@ Volume readRawVolume(const std::string &path, std::array<int64_t, 3> dims, Voxel
                             : type == VoxelType::UInt16 ? ScalarType::UInt16
                                                         : ScalarType::Float32;
   VolumeFile file(path);
+  file.checkRoom(volume.voxelCount() * scalarSize(scalar), volume.voxelCount() * sizeof(float), "");
   volume.values = readVoxels(file, scalar, false, volume.voxelCount());
   return volume;
 }

@@ -332,7 +332,9 @@ private:
     for (uint64_t i = 0; i < n; ++i) {
       Vec3f p = grid_.points[i];
       if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
-        failLine("point " + std::to_string(i) + " is not finite");
+        failLine(
+            "point " + std::to_string(i) +
+            (type.number == ScalarType::Float64 ? " is out of float range or not finite" : " is not finite"));
     }
     lastComponents_ = 3;
   }

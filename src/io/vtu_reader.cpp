@@ -3,6 +3,7 @@
 // Only the XML head is given to pugixml: appended raw data can hold any byte, so the text up to the '_'
 // marker of <AppendedData> is parsed alone and each appended array is read at its `offset` after the marker.
 #include "core/buffer.h"
+#include "core/limits.h"
 #include "io/file_buffer.h"
 #include "io/mesh_io.h"
 #include "io/scalar_type.h"
@@ -24,6 +25,7 @@
 #include <atomic>
 #include <bit>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <memory>
 #include <mutex>
@@ -34,6 +36,12 @@
 namespace uvr {
 
 namespace {
+
+std::string numberText(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%g", value);
+  return text;
+}
 
 bool multiplyOverflows(uint64_t a, uint64_t b, uint64_t &product) {
   return __builtin_mul_overflow(a, b, &product);
@@ -398,6 +406,9 @@ private:
       fail(position(root),
            "unsupported compressor '" + std::string(compressor) + "' (only vtkZLibDataCompressor)");
     compressed_ = !compressor.empty();
+    // Summed over every array, not checked per array: arrays may share one appended offset. Binary values
+    // widen at most 8 times as they are decoded (ascii text is bounded by its own length).
+    inflation_ = InflationBound(path_, file_.size(), compressed_ ? kMaxDeflateRatio : 8);
   }
 
   uint64_t countAttribute(pugi::xml_node node, const char *name) const {
@@ -627,7 +638,9 @@ private:
     uint64_t bytes = 0;
     if (multiplyOverflows(count, scalarSize(array.type), bytes))
       fail(array, array.position, "expected value count overflows");
-    return locate(array, bytes);
+    Payload payload = locate(array, bytes); // its header checked first: it allocates only what the file holds
+    inflation_.claim(bytes, "byte " + std::to_string(array.position), "DataArray '" + array.name + "'");
+    return payload;
   }
 
   /// Writes the array's `count` values (as prepared) to out, converted to T by `to`. Returns the index of the
@@ -701,8 +714,14 @@ private:
       grid.points.resize(pointCount);
       const uint64_t bad = fill(array, payload, values, &grid.points[0].x, CastTo<float>{},
                                 [](float x) { return !std::isfinite(x); });
-      if (bad < values)
-        fail(array, array.position, "point " + std::to_string(bad / 3) + " is not finite");
+      if (bad < values) { // a finite Float64 beyond float's range is named so, read again as doubles
+        inflation_ = InflationBound(path_, UINT64_MAX / 2, 1);
+        const double value = readValues<Buffer<double>>(array, values)[bad];
+        fail(array, array.position,
+             "point " + std::to_string(bad / 3) +
+                 (std::isfinite(value) ? " is out of float range (" + numberText(value) + ")"
+                                       : " is not finite"));
+      }
     }
 
     grid.offsets = Buffer<int64_t>(1);
@@ -730,11 +749,13 @@ private:
       bad = fill(connectivity, indices, connectivityCount, grid.connectivity.data(),
                  NarrowPointIndex{uint32_t(pointCount)},
                  [](uint32_t index) { return index == NarrowPointIndex::kOutside; });
-      if (bad < connectivityCount) // named by its value in the file, read again
+      if (bad < connectivityCount) { // named by its value in the file, read again
+        inflation_ = InflationBound(path_, UINT64_MAX / 2, 1);
         fail(connectivity, connectivity.position,
              "point index " +
                  std::to_string(readValues<Buffer<int64_t>>(connectivity, connectivityCount)[bad]) +
                  " at entry " + std::to_string(bad) + " is outside [0, " + std::to_string(pointCount) + ")");
+      }
 
       if (types.type == ScalarType::UInt8) {
         grid.types = readValues<Buffer<uint8_t>>(types, cellCount);
@@ -947,6 +968,7 @@ private:
   bool swap_ = false;
   int headerBytes_ = 4;
   bool compressed_ = false;
+  mutable InflationBound inflation_{"", 0, 1};
 };
 
 } // namespace

@@ -14,6 +14,7 @@
 #include <algorithm>
 #include <array>
 #include <bit>
+#include <cstdio>
 #include <cstring>
 #include <functional>
 #include <vector>
@@ -41,9 +42,28 @@ ArraySource copyOf(std::string xmlAttributes, const void *data, uint64_t bytes) 
           }};
 }
 
-std::string escapeXml(const std::string &text) {
+/// `text` for an XML attribute; throws uvr::Error naming `path` for a control character that XML 1.0 cannot
+/// hold at all (NUL, and the others but tab, line feed and carriage return, kept as references).
+std::string escapeXml(const std::string &text, const std::string &path) {
   std::string out;
   for (char c : text) {
+    const auto byte = static_cast<unsigned char>(c);
+    if (byte < 0x20 && c != '\t' && c != '\n' && c != '\r') {
+      std::string shown;
+      for (char d : text.substr(0, 80)) {
+        const auto b = static_cast<unsigned char>(d);
+        char hex[8];
+        std::snprintf(hex, sizeof hex, "\\x%02x", b);
+        shown += b < 0x20 ? std::string(hex) : std::string(1, d);
+      }
+      throw Error(path, "",
+                  "field name '" + shown + "' holds control character " + std::to_string(int(byte)) +
+                      ", which a .vtu file cannot hold");
+    }
+    if (byte < 0x20) { // tab, line feed, carriage return: a parser would read them back as spaces
+      out += "&#" + std::to_string(int(byte)) + ";";
+      continue;
+    }
     switch (c) {
     case '&':
       out += "&amp;";
@@ -164,8 +184,8 @@ void writeVtu(const std::string &path, const Mesh &mesh, bool compress) {
                   "field '" + field.name + "' has " + std::to_string(field.values.size()) +
                       " values, expected " + std::to_string(expected));
     (field.centering == Centering::Point ? pointData : cellData)
-        .push_back(copyOf("type=\"Float32\" Name=\"" + escapeXml(field.name) + "\"", field.values.data(),
-                          field.values.size() * 4));
+        .push_back(copyOf("type=\"Float32\" Name=\"" + escapeXml(field.name, path) + "\"",
+                          field.values.data(), field.values.size() * 4));
   }
   const ArraySource points = copyOf("type=\"Float32\" Name=\"Points\" NumberOfComponents=\"3\"",
                                     mesh.points.data(), mesh.points.size() * 12);

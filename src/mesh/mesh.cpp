@@ -4,6 +4,7 @@
 #include "mesh/spatial_order.h"
 #include <uvr/error.h>
 
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 
@@ -503,6 +504,21 @@ int backToBackSlot(const CellArrays<uint32_t> &grid) {
 
 } // namespace
 
+void checkPoints(std::span<const Vec3f> points, const std::string &source) {
+  const size_t n = points.size();
+  const size_t bad = tbb::parallel_reduce(
+      tbb::blocked_range<size_t>(0, n, 1 << 16), n,
+      [&](const tbb::blocked_range<size_t> &r, size_t least) {
+        for (size_t i = r.begin(); i < r.end() && i < least; ++i)
+          if (!(std::isfinite(points[i].x) && std::isfinite(points[i].y) && std::isfinite(points[i].z)))
+            return i;
+        return least;
+      },
+      [](size_t a, size_t b) { return std::min(a, b); });
+  if (bad < n)
+    throw Error(source, "point " + std::to_string(bad), "coordinates are not finite");
+}
+
 Mesh buildMesh(UnstructuredGrid &&grid, const std::string &source) {
   Mesh mesh = buildMesh(std::move(grid.points), CellArraysView{grid.offsets, grid.connectivity, grid.types},
                         std::move(grid.fields), source);
@@ -512,11 +528,13 @@ Mesh buildMesh(UnstructuredGrid &&grid, const std::string &source) {
 
 Mesh buildMesh(UninitVector<Vec3f> &&points, CellArraysView cells, std::vector<ScalarField> &&fields,
                const std::string &source) {
+  checkPoints(points, source);
   return groupAndBuild(std::move(points), cells, std::move(fields), source);
 }
 
 Mesh buildMesh(UninitVector<Vec3f> &&points, CellBuffers &&cells, std::vector<ScalarField> &&fields,
                const std::string &source) {
+  checkPoints(points, source);
   const CellArrays<uint32_t> grid = cells.view();
   const size_t cellCount = grid.types.size();
   checkSpan(grid, source);

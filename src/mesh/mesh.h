@@ -74,6 +74,10 @@ bool orientCell(CellType type, uint32_t *v, std::span<const Vec3f> points);
 /// fields to match. Lower-dimensional cells are dropped and counted; `source` names the file in errors.
 Mesh buildMesh(UnstructuredGrid &&grid, const std::string &source);
 
+/// The points' check that every reader and VolumeMesh::fromArrays share (buildMesh calls it): throws
+/// uvr::Error naming the first point with a coordinate that is not finite.
+void checkPoints(std::span<const Vec3f> points, const std::string &source);
+
 /// The cell arrays of an unstructured grid as VTK stores them, viewed in place (e.g. numpy arrays handed over
 /// from Python), so that building a mesh from them copies nothing twice. Point indices are VTK's 64 bits, or
 /// 32 where a reader narrowed them as it checked them (half the memory to write and read again).
