@@ -322,7 +322,7 @@ protected:
 Image render(const VolumeMesh &mesh, const std::string &field) {
   VolumeRenderer renderer(mesh, mesh.chooseField(field));
   const int index = mesh.chooseField(field);
-  renderer.setTransferFunction(builtinColorMap("Cool to Warm"), mesh.fieldRange(index));
+  renderer.setTransferFunction(builtinColorMap("Cool to Warm"), defaultTransferRange(mesh.fieldRange(index)));
   Camera camera;
   const Box3f b = mesh.bounds();
   camera.at = (b.lower + b.upper) * 0.5f;

@@ -124,7 +124,7 @@ def test_transfer_function_arrays_must_be_finite(bad):
     bad_opacities[0, 0] = bad
     with pytest.raises(uvr.Error, match="opacities must be finite"):
         uvr.TransferFunction.from_arrays(colors, bad_opacities)
-    with pytest.raises(uvr.Error, match="range must be finite"):
+    with pytest.raises(uvr.Error, match="range .* both finite"):
         uvr.TransferFunction.from_arrays(colors, opacities, range=(0.0, bad))
     uvr.TransferFunction.from_arrays(colors, opacities, range=(0.0, 1.0))
 

@@ -77,7 +77,13 @@ struct VolumeRenderer::Impl {
 };
 
 VolumeRenderer::VolumeRenderer(VolumeMesh mesh, int fieldIndex, uint32_t leafSize)
-    : impl_(std::make_unique<Impl>(std::move(mesh), fieldIndex, leafSize)) {}
+    : impl_(std::make_unique<Impl>(std::move(mesh), fieldIndex, leafSize)) {
+  // Said of the data here, before a default camera or step built from it is refused in other words.
+  const VolumeMesh &m = impl_->mesh;
+  const Box3f b = m.bounds();
+  if (m.cellCount() > 0 && b.lower.x == b.upper.x && b.lower.y == b.upper.y && b.lower.z == b.upper.z)
+    throw Error(m.source(), "", "the mesh has zero extent: all its points coincide");
+}
 
 VolumeRenderer::~VolumeRenderer() = default;
 VolumeRenderer::VolumeRenderer(VolumeRenderer &&) noexcept = default;
@@ -132,6 +138,10 @@ void VolumeRenderer::render(const Camera &camera, const FrameSettings &settings,
   // The mesh's default step costs a pass over its cells, once: only where a setting asks for it.
   const bool defaults = !(settings.s1 > 0.f && settings.s2 > 0.f && settings.p > 0.f && settings.unit > 0.f);
   const VolumeMesh &mesh = impl_->mesh;
+  if (defaults && !(settings.s1 > 0.f && settings.unit > 0.f) && !(mesh.volumeStats().median > 0.0))
+    throw Error(mesh.source(), "",
+                "no default step: the median cell volume is 0 (at least half of the cells are degenerate); "
+                "give a step (s1) and opacity unit");
   const FrameSettings s = defaults ? withDefaultSampling(settings, mesh.defaultStep(),
                                                          defaultUnitDistance(mesh.bounds(), mesh.cellCount()))
                                    : settings;
