@@ -362,7 +362,8 @@ public:
   py::array_t<uint8_t> render(const py::object &cameraObject, const std::optional<PyTransferFunction> &tf,
                               const py::object &mode, const py::object &s1, const py::object &s2,
                               const py::object &p, const py::object &unit, const py::object &size,
-                              const py::object &background) {
+                              const py::object &background, const py::object &compositing,
+                              const py::object &steps) {
     // Every keyword is checked here, naming it, before any work (uvr.Error).
     std::vector<int64_t> sides;
     try {
@@ -380,6 +381,12 @@ public:
     settings.height = height;
     settings.background = toVec3(background, "background");
     settings.mode = parseMode(mode.cast<std::string>());
+    if (!py::isinstance<py::str>(compositing))
+      throw Error("compositing expects auto, point or preintegrated");
+    settings.compositing = parseCompositing(compositing.cast<std::string>());
+    if (!py::isinstance<py::str>(steps))
+      throw Error("steps expects auto, global or local");
+    settings.steps = parseStepSizing(steps.cast<std::string>());
     settings.s1 = optionalPositive(s1, "s1");
     settings.s2 = optionalPositive(s2, "s2");
     settings.p = optionalPositive(p, "p");
@@ -611,7 +618,8 @@ PYBIND11_MODULE(uvr, m) {
            py::arg("mode") = "full", py::arg("s1") = py::none(), py::arg("s2") = py::none(),
            py::arg("p") = py::none(), py::arg("unit") = py::none(),
            py::arg("size") = std::pair<int, int>(1024, 1024),
-           py::arg("background") = py::make_tuple(0.f, 0.f, 0.f),
+           py::arg("background") = py::make_tuple(0.f, 0.f, 0.f), py::arg("compositing") = "auto",
+           py::arg("steps") = "auto",
            "Returns an (h, w, 4) uint8 array: RGB composited over the background, and accumulated opacity x "
            "255")
       .def("default_camera", &PyRenderer::defaultCamera, py::arg("fovy") = 30.f, py::arg("aspect") = 1.f,

@@ -76,7 +76,9 @@ void addRenderOptions(CLI::App *cmd, RenderOptions &o) {
                   "global | local | auto (local in full: each partition's steps scaled to its cells' size)")
       ->check(CLI::IsMember({"auto", "global", "local"}))
       ->capture_default_str();
-  cmd->add_option("--s1", o.s1, "Smallest (and fixed) step (default: cube root of the median cell volume)")
+  cmd->add_option("--s1", o.s1,
+                  "Smallest (and fixed) step (default: cube root of the median volume per tetrahedron of a "
+                  "cell's split)")
       ->check(positiveNumber());
   cmd->add_option("--s2", o.s2, "Largest adaptive step, >= s1 (default: 8 * the default s1)")
       ->check(positiveNumber());

@@ -272,6 +272,8 @@ BAD_NUMBERS = [0, -1, float("nan"), float("inf"), "abc", [1, 2]]
     ("size", [(0, 8), (-1, 8), (8, 0), (20000, 8), (8,), "abc", (float("nan"), 8), None]),
     ("background", [(255, 255, 255), (-1, 0, 0), (float("nan"), 0, 0), (float("inf"), 0, 0), (1, 2), "abc"]),
     ("mode", ["bogus", 3, None]),
+    ("compositing", ["bogus", 3, None]),
+    ("steps", ["bogus", 3, None]),
     ("camera", [{"fovy": 0}, {"fovy": 180}, {"fovy": 200}, {"fovy": float("nan")}, {"fovy": "abc"},
                 {"eye": (0, 0, 0), "at": (0, 0, 0)}, {"eye": (float("nan"), 0, 0)}, {"at": (float("inf"), 0, 0)},
                 {"up": (0, 0, 1)}, {"up": (0, 0, 0)}, {"up": (float("nan"), 0, 1)}, {"view": "bogus"},
@@ -284,6 +286,30 @@ def test_every_render_keyword_is_checked(keyword, values):
             renderer.render(size=(8, 8), **{keyword: value}) if keyword != "size" else renderer.render(size=value)
         named = {"camera": ("fovy", "eye", "at", "up", "view", "camera", "bogus")}.get(keyword, (keyword,))
         assert any(name in str(error.value) for name in named), (keyword, value, str(error.value))
+
+
+def test_compositing_and_steps_as_the_command(tmp_path):
+    """The keywords draw what the command's options draw, and the statistics say how each frame was drawn."""
+    renderer = uvr.Renderer(uvr.load(DISK), field="Temp")
+    camera = {"eye": (40.0, 22.5, 20.08), "at": (0.0, 0.0, 0.08), "up": (0, 0, 1)}
+    images = {}
+    for compositing, steps in (("point", "global"), ("preintegrated", "local")):
+        png, stats_path = tmp_path / f"{compositing}.png", tmp_path / f"{compositing}.json"
+        result = run_cli("render", DISK, "--field", "Temp", "--eye", "40,22.5,20.08", "--at", "0,0,0.08", "--up",
+                         "0,0,1", "--size", "64x64", "--compositing", compositing, "--steps", steps, "-o", str(png),
+                         "--stats", str(stats_path))
+        assert result.returncode == 0, result.stderr
+        image = renderer.render(camera=camera, size=(64, 64), compositing=compositing, steps=steps)
+        np.testing.assert_array_equal(image[:, :, :3], uvr.read_png(str(png)))
+        cli_stats = json.loads(stats_path.read_text())
+        assert renderer.last_stats["compositing"] == cli_stats["compositing"] == compositing
+        assert renderer.last_stats["steps"] == cli_stats["steps"] == steps
+        images[compositing] = image
+    assert not np.array_equal(images["point"], images["preintegrated"])
+    renderer.render(camera=camera, size=(8, 8))
+    assert (renderer.last_stats["compositing"], renderer.last_stats["steps"]) == ("preintegrated", "local")
+    renderer.render(camera=camera, size=(8, 8), mode="reference")
+    assert (renderer.last_stats["compositing"], renderer.last_stats["steps"]) == ("point", "global")
 
 
 def test_every_constructor_keyword_is_checked():

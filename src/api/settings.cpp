@@ -79,7 +79,7 @@ StepSizing parseStepSizing(const std::string &name) {
   for (StepSizing s : {StepSizing::Auto, StepSizing::Global, StepSizing::Local})
     if (name == stepSizingName(s))
       return s;
-  throw Error("unknown step sizing '" + name + "': expected auto, global or local");
+  throw Error("unknown steps '" + name + "': expected auto, global or local");
 }
 
 bool stepsFollowMesh(StepSizing sizing, RenderMode mode) {
