@@ -16,46 +16,35 @@ namespace {
 constexpr float kDefaultS2Factor = 8.f;
 constexpr float kDefaultP = 4.f;
 
+/// Names of each enumeration's values, in the order of its values.
+constexpr const char *kModeNames[] = {"reference", "skip", "adaptive", "full"};
+constexpr const char *kCompositingNames[] = {"auto", "point", "preintegrated"};
+constexpr const char *kStepSizingNames[] = {"auto", "global", "local"};
+
+template <typename Enum, size_t N> const char *nameOf(Enum value, const char *const (&names)[N]) {
+  return size_t(value) < N ? names[size_t(value)] : "?";
+}
+
+/// The value named `name`; else an error naming `what` and listing the names.
+template <typename Enum, size_t N>
+Enum parseName(const std::string &name, const char *const (&names)[N], const char *what) {
+  std::string expected;
+  for (size_t i = 0; i < N; ++i) {
+    if (name == names[i])
+      return Enum(i);
+    expected += std::string(i == 0 ? "" : i + 1 == N ? " or " : ", ") + names[i];
+  }
+  throw Error("unknown " + std::string(what) + " '" + name + "': expected " + expected);
+}
+
 } // namespace
 
-const char *modeName(RenderMode mode) {
-  switch (mode) {
-  case RenderMode::Reference:
-    return "reference";
-  case RenderMode::Skip:
-    return "skip";
-  case RenderMode::Adaptive:
-    return "adaptive";
-  case RenderMode::Full:
-    return "full";
-  }
-  return "?";
-}
+const char *modeName(RenderMode mode) { return nameOf(mode, kModeNames); }
+RenderMode parseMode(const std::string &name) { return parseName<RenderMode>(name, kModeNames, "mode"); }
 
-RenderMode parseMode(const std::string &name) {
-  for (RenderMode mode : {RenderMode::Reference, RenderMode::Skip, RenderMode::Adaptive, RenderMode::Full})
-    if (name == modeName(mode))
-      return mode;
-  throw Error("unknown mode '" + name + "': expected reference, skip, adaptive or full");
-}
-
-const char *compositingName(Compositing compositing) {
-  switch (compositing) {
-  case Compositing::Auto:
-    return "auto";
-  case Compositing::Point:
-    return "point";
-  case Compositing::Preintegrated:
-    return "preintegrated";
-  }
-  return "?";
-}
-
+const char *compositingName(Compositing compositing) { return nameOf(compositing, kCompositingNames); }
 Compositing parseCompositing(const std::string &name) {
-  for (Compositing c : {Compositing::Auto, Compositing::Point, Compositing::Preintegrated})
-    if (name == compositingName(c))
-      return c;
-  throw Error("unknown compositing '" + name + "': expected auto, point or preintegrated");
+  return parseName<Compositing>(name, kCompositingNames, "compositing");
 }
 
 bool preintegrates(Compositing compositing, RenderMode mode) {
@@ -63,23 +52,9 @@ bool preintegrates(Compositing compositing, RenderMode mode) {
          (compositing == Compositing::Auto && mode == RenderMode::Full);
 }
 
-const char *stepSizingName(StepSizing sizing) {
-  switch (sizing) {
-  case StepSizing::Auto:
-    return "auto";
-  case StepSizing::Global:
-    return "global";
-  case StepSizing::Local:
-    return "local";
-  }
-  return "?";
-}
-
+const char *stepSizingName(StepSizing sizing) { return nameOf(sizing, kStepSizingNames); }
 StepSizing parseStepSizing(const std::string &name) {
-  for (StepSizing s : {StepSizing::Auto, StepSizing::Global, StepSizing::Local})
-    if (name == stepSizingName(s))
-      return s;
-  throw Error("unknown steps '" + name + "': expected auto, global or local");
+  return parseName<StepSizing>(name, kStepSizingNames, "steps");
 }
 
 bool stepsFollowMesh(StepSizing sizing, RenderMode mode) {
