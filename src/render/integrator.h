@@ -103,29 +103,32 @@ template <class Sampling, bool kPreintegrate> struct RayMarch {
       ++samples;
       float value;
       const bool inside = sampler.sample(t, k, walkSteps, far, value);
-      if (kPreintegrate && closing) {
-        closeSegment(color, inside ? value : pending.value, spacing);
-        closing = false;
-        if (color.w >= settings.terminationOpacity) {
-          opaque = true;
-          break;
+      if constexpr (kPreintegrate) {
+        // The pending segment ends here: at its end (closing, or the next sample joining it) it runs to the
+        // value there, else (outside the mesh, or past a gap) it keeps its own. One call site: the GPU's
+        // kernel inlines the integration once.
+        if (pending.valid) {
+          const bool joined = inside && (closing || k == pending.next);
+          closeSegment(color, joined ? value : pending.value, spacing);
         }
-        k = kStart - stride; // the loop's increment brings it to kStart
-        continue;
+        if (closing) {
+          closing = false;
+          if (color.w >= settings.terminationOpacity) {
+            opaque = true;
+            break;
+          }
+          k = kStart - stride; // the loop's increment brings it to kStart
+          continue;
+        }
       }
-      if (!inside) {
-        if (kPreintegrate && pending.valid)
-          closeSegment(color, pending.value, spacing);
+      if (!inside)
         continue;
-      }
       if (first) {
         hint = sampler.cell();
         first = false;
       }
       const bool last = !(grid.at(k + stride) < tb);
       if constexpr (kPreintegrate) {
-        if (pending.valid)
-          closeSegment(color, k == pending.next ? value : pending.value, spacing);
         pending = {value, k, last ? kEnd : k + stride, true};
       } else {
         const Vec4f c = scene.tf.sample(value);
