@@ -1,7 +1,9 @@
 // The library's checks that every front end relies on: camera and settings validation, named views, the
 // default opacity unit distance and the default transfer-function range.
 #include <uvr/camera.h>
+#include <uvr/color_map.h>
 #include <uvr/error.h>
+#include <uvr/mesh.h>
 #include <uvr/renderer.h>
 #include <uvr/settings.h>
 
@@ -10,6 +12,7 @@
 #include <cmath>
 #include <limits>
 #include <string>
+#include <vector>
 
 namespace uvr {
 namespace {
@@ -52,6 +55,40 @@ TEST(ValidateCamera, RefusesDegenerateCamerasNamingTheField) {
   c = good;
   c.up = {0.f, kNan, 0.f};
   EXPECT_NE(refusal(c).find("up"), std::string::npos);
+  // Finite, but the view direction overflows, or its length does: said so, not called parallel to up.
+  c = good;
+  c.eye = {3.f, 3.f, 3e38f};
+  c.at = {3.f, 3.f, -3e38f};
+  EXPECT_NE(refusal(c).find("too far apart"), std::string::npos) << refusal(c);
+  c.at = {3.f, 3.f, 0.f};
+  EXPECT_NO_THROW(validateCamera(c));
+}
+
+// From an eye so far that float positions along the rays cannot resolve the step, a frame is refused, never
+// left marching in place.
+TEST(Renderer, RefusesACameraTooFarForTheStep) {
+  const std::vector<float> points{0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1}, values{0, 1, 2, 3};
+  const std::vector<int64_t> offsets{0, 4}, connectivity{0, 1, 2, 3};
+  const std::vector<uint8_t> types{10};
+  MeshArrays arrays;
+  arrays.points = ArrayView(std::span<const float>(points), 3);
+  arrays.offsets = offsets;
+  arrays.connectivity = connectivity;
+  arrays.types = types;
+  arrays.fields.push_back({"f", Centering::Point, ArrayView(std::span<const float>(values))});
+  VolumeRenderer renderer(VolumeMesh::fromArrays(arrays), 0);
+  renderer.setTransferFunction(builtinColorMap("viridis"), {0.f, 3.f});
+  FrameSettings settings;
+  settings.width = settings.height = 8;
+  Camera camera{{0.3f, 0.3f, 1e30f}, {0.3f, 0.3f, 0.f}, {0.f, 1.f, 0.f}, 30.f};
+  try {
+    renderer.render(camera, settings);
+    ADD_FAILURE() << "no uvr::Error";
+  } catch (const Error &e) {
+    EXPECT_NE(std::string(e.what()).find("too far"), std::string::npos) << e.what();
+  }
+  camera.eye.z = 1e3f;
+  EXPECT_NO_THROW(renderer.render(camera, settings));
 }
 
 TEST(NamedViews, FrameTheBoundsFromEachSide) {

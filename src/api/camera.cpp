@@ -1,6 +1,7 @@
 #include <uvr/camera.h>
 #include <uvr/error.h>
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
@@ -73,12 +74,20 @@ void validateCamera(const Camera &c) {
   if (!finite(c.up))
     throw Error("the camera's view-up (up) must be finite; got " + text(c.up));
   const Vec3f direction = c.at - c.eye;
+  if (!finite(direction))
+    throw Error("the camera's eye " + text(c.eye) + " and focal point (at) " + text(c.at) +
+                " are too far apart for float arithmetic");
   if (!(length(direction) > 0.f))
     throw Error("the camera's eye and focal point (at) must differ; both are " + text(c.eye));
   if (!(length(c.up) > 0.f))
     throw Error("the camera's view-up (up) must not be zero");
   // Parallel within float precision: the image's horizontal axis would be undefined or noise.
-  if (!(length(cross(normalize(direction), normalize(c.up))) > 1e-6f))
+  // Scaled to their largest component first: the length of a vector of components near 1e38 overflows.
+  auto unit = [](Vec3f v) {
+    const float largest = std::max({std::fabs(v.x), std::fabs(v.y), std::fabs(v.z)});
+    return normalize(v * (1.f / largest));
+  };
+  if (!(length(cross(unit(direction), unit(c.up))) > 1e-6f))
     throw Error("the camera's view-up (up) " + text(c.up) + " must not be parallel to the view direction " +
                 text(direction) + " (from eye to at)");
 }

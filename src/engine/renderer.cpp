@@ -15,6 +15,7 @@ Renderer::Renderer(const Mesh &mesh, int fieldIndex, uint32_t leafSize) : mesh_(
   meshView_ = makeMeshView(mesh_, fieldIndex);
   const Box3f bounds = mesh.bounds();
   diagonal_ = bounds.lower.x <= bounds.upper.x ? length(bounds.upper - bounds.lower) : 0.f;
+  center_ = bounds.lower.x <= bounds.upper.x ? bounds.center() : Vec3f{};
 }
 
 Renderer::~Renderer() = default;
@@ -94,6 +95,17 @@ void Renderer::render(const Camera &camera, const RenderSettings &settings, Fram
     std::ostringstream what;
     what << "step s1 = " << s.s1 << " takes " << diagonal_ / s.s1
          << " samples along the mesh's diagonal, more than the " << kMostSamplesPerRay << " a ray may take";
+    throw Error(what.str());
+  }
+  // A ray's samples lie at t = t_enter + k * spacing in float: from an eye so far that the spacing is below
+  // t's precision they would not advance. Spacings go down to s1 / 8 where steps follow the mesh.
+  const float finest = s.followMesh ? s.s1 / 8.f : s.s1;
+  const float reach = length(camera.eye - center_) + diagonal_;
+  if (!(reach / finest < float(1 << 23))) {
+    std::ostringstream what;
+    what << "the camera's eye (" << camera.eye.x << ", " << camera.eye.y << ", " << camera.eye.z
+         << ") is too far from the mesh for step s1 = " << s.s1
+         << ": float positions along its rays cannot resolve the step; move it closer or take a larger s1";
     throw Error(what.str());
   }
   if (settings.width <= 0 || settings.height <= 0)

@@ -99,6 +99,7 @@ private:
   const Mesh &mesh_;
   MeshView meshView_;
   float diagonal_ = 0.f; ///< of the mesh bounds
+  Vec3f center_;         ///< of the mesh bounds
   uint32_t leafSize_;
   std::optional<TransferFunction> tf_;
   uint32_t transparentPartitions_ = 0;
