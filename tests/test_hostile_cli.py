@@ -51,6 +51,23 @@ def nifti(path, sform):
         f.write(bytes(header) + bytes(range(256)) * 2)
 
 
+def graded_tets_vtu():
+    """One tet of edge 1000 and two of edge 1e-6, as ASCII .vtu."""
+    points = [(0, 0, 0), (1000, 0, 0), (0, 1000, 0), (0, 0, 1000)]
+    for base in ((10, 10, 10), (20, 20, 20)):
+        points += [base, (base[0] + 1e-6, base[1], base[2]), (base[0], base[1] + 1e-6, base[2]),
+                   (base[0], base[1], base[2] + 1e-6)]
+    coords = " ".join(f"{c:.9g}" for p in points for c in p)
+    values = " ".join(str(i) for i in range(len(points)))
+    return (f'<VTKFile type="UnstructuredGrid" version="1.0"><UnstructuredGrid><Piece NumberOfPoints="12" '
+            f'NumberOfCells="3"><PointData><DataArray type="Float32" Name="f" format="ascii">{values}</DataArray>'
+            f'</PointData><Points><DataArray type="Float64" NumberOfComponents="3" format="ascii">{coords}'
+            '</DataArray></Points><Cells><DataArray type="Int64" Name="connectivity" format="ascii">'
+            '0 1 2 3 4 5 6 7 8 9 10 11</DataArray><DataArray type="Int64" Name="offsets" format="ascii">4 8 12'
+            '</DataArray><DataArray type="UInt8" Name="types" format="ascii">10 10 10</DataArray></Cells>'
+            '</Piece></UnstructuredGrid></VTKFile>')
+
+
 def main():
     uvr, shared = sys.argv[1], sys.argv[2]
     mesh = os.path.join(shared, "small", "pyramid_ug.vtu")
@@ -95,6 +112,32 @@ def main():
         with open(vtk, "wb") as f:
             f.write(grid.replace(b"SCALARS scalars float", b"SCALARS sca%00lars float", 1))
         expect_error(uvr, ["convert", vtk, os.path.join(tmp, "nul.vtu")], "control character 0")
+
+        # Steps: a step taking more than 10^4 samples along the diagonal is warned of, more than 2^20 refused;
+        # the default step of a mesh of one large and two tiny tets stays within 10^4 (it used to take 5.6e-7,
+        # and the march never ended); a camera too far for the step is refused, not marched in place.
+        disk = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "data", "disk_out_ref.vtu")
+        result = run(uvr, "render", disk, "--s1", "0.002", "--size", "8x8", "-o", png, timeout=60)
+        if result is not None and (result.returncode != 0 or "warning: --s1 0.002 takes" not in result.stderr):
+            failures.append(f"--s1 0.002: no warning of the samples it takes: {result.stderr[-300:]!r}")
+        expect_error(uvr, ["render", disk, "--s1", "1e-9", "--size", "8x8", "-o", png], "a ray may take",
+                     timeout=20)
+        expect_error(uvr, ["render", disk, "--eye", "3,3,1e30", "--up", "1,0,0", "--size", "8x8", "-o", png],
+                     "too far from the mesh", timeout=20)
+        graded = os.path.join(tmp, "graded.vtu")
+        with open(graded, "w") as f:
+            f.write(graded_tets_vtu())
+        stats = os.path.join(tmp, "graded.json")
+        result = run(uvr, "render", graded, "--size", "32x32", "-o", png, "--stats", stats, timeout=20)
+        if result is not None:
+            if result.returncode != 0:
+                failures.append(f"one large and two tiny tets: exit {result.returncode}: {result.stderr[-300:]!r}")
+            else:
+                import json
+                with open(stats) as f:
+                    s1 = json.load(f)["s1"]
+                if not s1 >= 1e-4 * 1000:
+                    failures.append(f"one large and two tiny tets: default s1 {s1}, below 1e-4 of the diagonal")
 
         # uvr gen on a NIfTI with a NaN in its sform.
         nii = os.path.join(tmp, "nan.nii")

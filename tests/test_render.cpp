@@ -1,6 +1,7 @@
 // Whole-frame properties of the integrator: analytic transmittance, equivalence of the modes, no cracks at
 // partition boundaries, independence of cell winding.
 #include "engine/renderer.h"
+#include "mesh/mesh_stats.h"
 #include "mesh/procedural_mesh.h"
 #include "mesh/tet_neighbors.h"
 #include "render/boundary_crossings.h"
@@ -730,4 +731,19 @@ TEST_P(Integrator, LocalStepsFollowAGradedMesh) {
   expectExponentialTransmittance(renderer, local, alphaPerUnit, 0.02f * *coarsest, 1e-5f);
   const Frame a = renderer.render(obliqueCamera(), global), b = renderer.render(obliqueCamera(), local);
   EXPECT_NE(a.samplesTotal, b.samplesTotal);
+}
+
+// The default step from the median volume per tetrahedron, within [1e-4 x diagonal, thinnest side / 4]: a
+// mesh of tiny cells cannot make rays of millions of samples, one of a few flat cells is sampled through (a
+// single pyramid 6 x 6 x 3 rendered black at the step of its volume, 3.3), and empty bounds give 0.
+TEST(DefaultStep, FollowsTheCellsWithinTheBounds) {
+  const Box3f cube{{0.f, 0.f, 0.f}, {10.f, 10.f, 10.f}};
+  VolumeStats stats;
+  stats.medianPerTet = 1.0 / 8.0;
+  EXPECT_FLOAT_EQ(defaultStepSize(stats, cube), 0.5f);
+  stats.medianPerTet = 1e-18; // edge 1e-6
+  EXPECT_FLOAT_EQ(defaultStepSize(stats, cube), 1e-4f * length(cube.size()));
+  stats.medianPerTet = 36.0 / 2.0; // the pyramid
+  EXPECT_FLOAT_EQ(defaultStepSize(stats, {{0.f, 0.f, 0.f}, {6.f, 6.f, 3.f}}), 0.75f);
+  EXPECT_EQ(defaultStepSize(stats, Box3f{}), 0.f);
 }

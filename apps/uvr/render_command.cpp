@@ -71,6 +71,15 @@ void runRender(const RenderCommandOptions &o) {
   const LoadedMesh loaded = loadForRendering(o.view);
   const VolumeMesh &mesh = loaded.mesh;
 
+  // The default step takes at most 10^4 along the diagonal; a step given that takes more makes slow frames.
+  const Box3f bounds = mesh.bounds();
+  const float diagonal = length(bounds.upper - bounds.lower);
+  if (settings.s1 > 0.f && diagonal / settings.s1 > 1e4f)
+    std::fprintf(
+        stderr,
+        "uvr: warning: --s1 %g takes %.0f samples along the mesh's diagonal (the default at most 10000)\n",
+        double(settings.s1), double(diagonal / settings.s1));
+
   VolumeRenderer renderer(mesh, loaded.fieldIndex, o.view.leafSize);
   // The acceleration data is built first, outside the frame times (for CUDA on the GPU, so that the transfer
   // function's update is timed where the frames use it).
