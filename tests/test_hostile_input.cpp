@@ -449,16 +449,17 @@ TEST(HostileThreads, OneRendererSharedByThreads) {
   }
   ASSERT_NE(expected[0], expected[1]);
   // Lazily built on first use by whichever thread comes first; each thread's function kept through its
-  // frame by a lock of the caller's (the renderer serialises its own steps).
+  // frame by a lock of the caller's, which every change of function takes (the renderer serialises its own
+  // steps, not a caller's pair of them).
   std::mutex frameLock;
+  shared.setTransferFunction(maps[0], range); // nothing built yet
   std::atomic<int> wrong{0}, failed{0};
   std::vector<std::thread> threads;
   for (int t = 0; t < 4; ++t)
     threads.emplace_back([&, t] {
       for (int i = 0; i < 6; ++i) {
         try {
-          if (i % 2 == 0) { // unlocked: only the library's own serialisation
-            shared.setTransferFunction(maps[t % 2], range);
+          if (i % 2 == 0) { // unlocked, beside other threads' changes: only the library's own serialisation
             shared.render(camera, settings);
             continue;
           }
