@@ -43,7 +43,7 @@ template <typename Storage> struct PartitionArrays {
   Array<float> valueMin, valueMax; ///< scalar range of the cells listed in each partition
   Array<uint64_t> cellCounts;      ///< cells listed (a cell straddling leaves is listed in each)
   /// Per partition, the size of its cells against the mesh's, as a power of two from 1/8 to 8 (see
-  /// assignStepScales): steps that follow the mesh scale by it.
+  /// computeStepScales): steps that follow the mesh scale by it.
   Array<float> stepScale;
   Array<float> nodeMaxStepScale; ///< per KD node, the largest stepScale below
   Box3f rootBounds;

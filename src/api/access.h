@@ -15,6 +15,9 @@ struct VolumeMesh::Impl {
   std::string source;
   mutable std::once_flag statsOnce; // volume statistics are computed on first use
   mutable VolumeStats stats;
+  // The bounds, a pass over the points, also on first use: every frame with default settings reads them.
+  mutable std::once_flag boundsOnce;
+  mutable Box3f bounds;
 };
 
 namespace detail {

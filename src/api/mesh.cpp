@@ -121,7 +121,10 @@ CellCounts VolumeMesh::cellCounts() const {
   return counts;
 }
 
-Box3f VolumeMesh::bounds() const { return impl_->mesh.bounds(); }
+Box3f VolumeMesh::bounds() const {
+  std::call_once(impl_->boundsOnce, [&] { impl_->bounds = impl_->mesh.bounds(); });
+  return impl_->bounds;
+}
 
 std::span<const Vec3f> VolumeMesh::points() const { return impl_->mesh.points; }
 
