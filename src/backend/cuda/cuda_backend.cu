@@ -15,6 +15,7 @@
 
 #include <algorithm>
 #include <cstring>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -111,10 +112,12 @@ struct CudaBackend::Impl {
   DeviceBuffer<Vec3f> points;
   DeviceBuffer<uint32_t> tets, pyramids, wedges, hexes;
   DeviceBuffer<float> values;
+  uint64_t pointCount = 0;
   DeviceAcceleration accel;
   double buildMs = 0.0;
   std::vector<std::pair<std::string, double>> buildSteps;
   DeviceMetadata metadata;
+  std::optional<TransferFunctionRangeView> tf; // the function's tables on the device, once set
   DeviceBuffer<double> tfPrefixSum, tfPrefixSquares;
   DeviceBuffer<float> tfOpacityMax;
   DeviceBuffer<Vec4f> tfTable, tfExtinction, tfExtinctionIntegral;
@@ -161,6 +164,7 @@ CudaBackend::CudaBackend(const MeshView &mesh, uint64_t pointCount, uint32_t lea
   UVR_CUDA_CHECK(cudaEventCreate(&d.kernelStart));
   UVR_CUDA_CHECK(cudaEventCreate(&d.kernelEnd));
   UVR_CUDA_CHECK(cudaEventCreate(&d.renderStart));
+  d.pointCount = pointCount;
   MeshView onDevice = mesh;
   onDevice.points = d.points.upload(mesh.points, pointCount);
   onDevice.tets = d.tets.upload(mesh.tets, 4 * mesh.tetCount);
@@ -192,10 +196,33 @@ uint32_t CudaBackend::setTransferFunction(const TransferFunction &tf) {
   ranges.prefixSquares = d.tfPrefixSquares.upload(tf.prefixSquares().data(), tf.prefixSquares().size());
   ranges.opacityMax = d.tfOpacityMax.upload(tf.opacityMaxima().data(), tf.opacityMaxima().size());
   d.scene.tf = ranges.function;
+  d.tf = ranges;
   d.skippingFrames = 0;
   d.tiles = false;
 
   return d.metadata.update(ranges, d.scene.partitions);
+}
+
+uint32_t CudaBackend::setField(const MeshView &view) {
+  Impl &d = *impl_;
+  MeshView &onDevice = d.scene.mesh;
+  onDevice.values = view.values
+                        ? d.values.upload(view.values, view.cellCentered ? view.cellCount() : d.pointCount)
+                        : nullptr;
+  onDevice.cellCentered = view.cellCentered;
+  // The ranges from the host's copy of the mesh: the tree is small to fetch, and one pass over the cells on
+  // all cores costs little beside a rebuild.
+  PartitionArrays<DeviceStorage> &parts = d.accel.partitions;
+  std::vector<KdNode> nodes(parts.nodes.size());
+  parts.nodes.download(nodes.data(), nodes.size());
+  const uint32_t count = d.scene.partitions.count;
+  std::vector<float> valueMin(count), valueMax(count);
+  computePartitionValueRanges(view, nodes, count, valueMin, valueMax);
+  parts.valueMin.upload(valueMin.data(), count);
+  parts.valueMax.upload(valueMax.data(), count);
+  d.skippingFrames = 0;
+  d.tiles = false;
+  return d.tf ? d.metadata.update(*d.tf, d.scene.partitions) : 0;
 }
 
 PartitionMetadata CudaBackend::metadata() const {

@@ -27,6 +27,9 @@ public:
   /// Uploads `tf` and recomputes the partitions' metadata on the GPU, as computePartitionMetadata does on the
   /// host; returns the number of fully transparent partitions.
   uint32_t setTransferFunction(const TransferFunction &tf) override;
+  /// Uploads the field of `view` (host pointers, same points and cells) and its partitions' value ranges,
+  /// computed on the host, and recomputes the metadata on the GPU.
+  uint32_t setField(const MeshView &view) override;
   /// Copies the metadata of the last setTransferFunction back, for checks against the host's.
   PartitionMetadata metadata() const override;
   /// Copies the acceleration data the GPU built back, for checks against the host's builds.
