@@ -115,8 +115,8 @@ void Renderer::render(const Camera &camera, const RenderSettings &settings, Fram
     throw Error(what.str());
   }
   // A ray's samples lie at t = t_enter + k * spacing in float: from an eye so far that the spacing is below
-  // t's precision they would not advance. Spacings go down to s1 / 8 where steps follow the mesh.
-  const float finest = s.followMesh ? s.s1 / 8.f : s.s1;
+  // t's precision they would not advance. Spacings go down to s1 / 16 where steps follow the mesh.
+  const float finest = s.followMesh ? s.s1 / 16.f : s.s1;
   const float reach = length(camera.eye - center_) + diagonal_;
   if (!(reach / finest < float(1 << 23))) {
     std::ostringstream what;

@@ -39,7 +39,7 @@ struct Frame {
 };
 
 /// The most steps of s1 a ray may take along the mesh bounds' diagonal: far fewer are ever of use, and with
-/// steps that follow the mesh (down to s1 / 8) the march's float grid indices stay exact (SampleGrid).
+/// steps that follow the mesh (down to s1 / 16) the march's float grid indices stay exact (SampleGrid).
 constexpr float kMostSamplesPerRay = float(1 << 20);
 
 class Renderer {
