@@ -17,7 +17,7 @@
 namespace uvr {
 namespace {
 
-const std::string kDisk = std::string(UVR_SHARED_DATA) + "/medium/disk_out_ref.vtu";
+const std::string kDisk = std::string(UVR_TEST_DATA) + "/../../data/disk_out_ref.vtu";
 
 /// The grid of `mesh` as arrays, with one point field computed from the points by `value` and one cell field
 /// of each cell's index: meshes made from it by fromArrays share their points and cells.
