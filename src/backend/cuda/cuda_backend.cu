@@ -4,6 +4,7 @@
 #include "backend/cuda/cuda_build.cuh"
 #include "backend/cuda/device_buffer.cuh"
 #include "backend/cuda/partition_metadata.cuh"
+#include "mesh/cell_neighbors.h"
 #include "render/scene.h"
 #include <uvr/error.h>
 #include <uvr/system.h>
@@ -149,8 +150,9 @@ struct CudaBackend::Impl {
   }
 };
 
-CudaBackend::CudaBackend(const MeshView &mesh, uint64_t pointCount, uint32_t leafSize)
+CudaBackend::CudaBackend(const Mesh &hostMesh, const MeshView &mesh, uint32_t leafSize)
     : impl_(std::make_unique<Impl>()) {
+  const uint64_t pointCount = hostMesh.points.size();
   int devices = 0;
   const cudaError_t status = cudaGetDeviceCount(&devices);
   if (status != cudaSuccess || devices == 0)
@@ -176,6 +178,15 @@ CudaBackend::CudaBackend(const MeshView &mesh, uint64_t pointCount, uint32_t lea
 
   const Timer timer;
   d.buildSteps = buildOnDevice(onDevice, pointCount, leafSize, d.accel);
+  const uint64_t otherCells = mesh.cellCount() - mesh.tetCount;
+  size_t freeBytes = 0, totalBytes = 0;
+  UVR_CUDA_CHECK(cudaMemGetInfo(&freeBytes, &totalBytes));
+  if (otherCells > 0 && cellAdjacencyBytes(otherCells) <= freeBytes / 8) {
+    const Timer adjacency;
+    copyMember(d.accel.cellNeighbors, buildCellNeighbors(hostMesh));
+    copyMember(d.accel.cellFacePlanes, buildCellFacePlanes(mesh));
+    d.buildSteps.emplace_back("cell adjacency (host)", adjacency.milliseconds());
+  }
   d.buildMs = timer.milliseconds();
   SceneView &scene = d.scene;
   scene = makeSceneView(onDevice, d.accel);

@@ -16,10 +16,11 @@ namespace uvr {
 
 class CudaBackend final : public RenderBackend {
 public:
-  /// Uploads `mesh` (host pointers, `pointCount` points) to the current GPU and builds the acceleration data
-  /// there, with partitions of at most `leafSize` cells; throws uvr::Error when there is no GPU or memory
-  /// runs out.
-  CudaBackend(const MeshView &mesh, uint64_t pointCount, uint32_t leafSize);
+  /// Uploads `view` of `mesh` to the current GPU and builds the acceleration data there, with partitions of
+  /// at most `leafSize` cells; throws uvr::Error when there is no GPU or memory runs out. The adjacency of
+  /// the cells other than tets, for walks between samples, is built on the host and uploaded where it takes
+  /// no more than an eighth of the GPU memory left.
+  CudaBackend(const Mesh &mesh, const MeshView &view, uint32_t leafSize);
   ~CudaBackend() override;
   CudaBackend(const CudaBackend &) = delete;
   CudaBackend &operator=(const CudaBackend &) = delete;
