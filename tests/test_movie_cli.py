@@ -218,14 +218,18 @@ def test_video(uvr, tmp):
     folder = fake_ffmpeg(os.path.join(tmp, "bin"), 0)
     out = os.path.join(tmp, "v%d.png")  # a '%' the pattern must escape
     stats = os.path.join(tmp, "v.json")
-    run(uvr, ["render", DISK, "--size", "8x8", "--orbit", "120", "--fps", "12", "-o", out, "--stats", stats],
+    # A frame past the movie's, left by an earlier one, stays out of the video.
+    Image.new("RGB", (8, 8)).save(os.path.join(tmp, "v%d_0003.png"))
+    run(uvr, ["render", DISK, "--size", "8x8", "--orbit", "120", "--fps", "12", "-o", out, "--stats", stats,
+              "--heatmap", os.path.join(tmp, "heat.png")],
         env={**os.environ, "PATH": folder + os.pathsep + os.environ["PATH"]})
+    check(all(os.path.exists(os.path.join(tmp, f"heat_{k:04d}.png")) for k in range(3)), "movie heat maps")
     with open(os.path.join(folder, "args")) as f:
         args = f.read().split("\n")
     video = os.path.join(tmp, "v%d.mp4")
     check(os.path.exists(video), "no OUT.mp4 from ffmpeg")
-    check(args[args.index("-framerate") + 1] == "12" and args[args.index("-i") + 1] ==
-          os.path.join(tmp, "v%%d_%04d.png"), f"ffmpeg arguments: {args}")
+    check(args[args.index("-framerate") + 1] == "12" and args[args.index("-frames:v") + 1] == "3" and
+          args[args.index("-i") + 1] == os.path.join(tmp, "v%%d_%04d.png"), f"ffmpeg arguments: {args}")
     with open(stats) as f:
         check(json.load(f)["video"] == video, "stats: video")
     failing = fake_ffmpeg(os.path.join(tmp, "failing"), 3)

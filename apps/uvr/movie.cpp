@@ -16,6 +16,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -24,6 +25,8 @@
 #include <fstream>
 #include <memory>
 #include <stdexcept>
+#include <string>
+#include <vector>
 
 extern char **environ;
 
@@ -33,7 +36,8 @@ namespace {
 
 /// A non-negative integer of at most 9 digits (no sign, no spaces), or nothing.
 std::optional<int> parseStepNumber(const std::string &text) {
-  if (text.empty() || text.size() > 9 || !std::all_of(text.begin(), text.end(), ::isdigit))
+  if (text.empty() || text.size() > 9 ||
+      !std::all_of(text.begin(), text.end(), [](unsigned char c) { return std::isdigit(c) != 0; }))
     return std::nullopt;
   return std::stoi(text);
 }
@@ -70,8 +74,8 @@ std::vector<int> expandTimeSteps(const TimeSteps &steps, int count, const std::s
   const int last = steps.all ? count - 1 : steps.last;
   if (last >= count)
     throw Error(mesh, "",
-                "--time-step: step " + std::to_string(last) + " is past the last one, " +
-                    std::to_string(count - 1) + " (" + std::to_string(count) + " time steps)");
+                "--time-step: step " + std::to_string(last) + " is past the last step, " +
+                    std::to_string(count - 1));
   std::vector<int> list;
   for (int step = steps.all ? 0 : steps.first; step <= last; step += steps.stride)
     list.push_back(step);
@@ -125,7 +129,7 @@ std::vector<Keyframe> readCameraPath(const std::string &path) {
           throw Error(where + ", frame: expected an integer from 0 to 10^6");
         key.frame = frame.get<int>();
       }
-      if (key.frame.has_value() != (i == 0 ? key.frame.has_value() : keys[0].frame.has_value()))
+      if (i > 0 && key.frame.has_value() != keys[0].frame.has_value())
         throw Error(where + ": give every keyframe a frame, or none");
       if (key.frame && (i == 0 ? *key.frame != 0 : *key.frame <= *keys.back().frame))
         throw Error(where +
@@ -283,10 +287,8 @@ MoviePlan planMovie(const RenderOptions &view, const MovieOptions &movie, const 
                     " but the movie has " + std::to_string(plan.frames) + " frames (--frames, --time-step)");
   if (!plan.keys.empty() && plan.frames < int(plan.keys.size()))
     throw Error(movie.cameraPath, "",
-                "--camera-path: " + std::to_string(plan.keys.size()) +
-                    " keyframes need at least as many "
-                    "frames, the movie has " +
-                    std::to_string(plan.frames) + " (--frames, --time-step)");
+                "--camera-path: " + std::to_string(plan.keys.size()) + " keyframes need as many frames, " +
+                    "the movie has " + std::to_string(plan.frames) + " (--frames, --time-step)");
   if (!plan.series)
     plan.steps.assign(size_t(plan.frames), steps.first);
   return plan;
@@ -303,15 +305,24 @@ public:
     const double seconds = timer_.milliseconds() / 1000.0;
     const double left = seconds / done * (frames_ - done);
     std::fprintf(stderr, "\ruvr: frame %d of %d, %.1f s, about %.0f s left   ", done, frames_, seconds, left);
-    if (done == frames_)
+    drawn_ = done < frames_;
+    if (!drawn_)
       std::fputc('\n', stderr);
     std::fflush(stderr);
+  }
+
+  /// Before another message: the line drawn ends.
+  void endLine() {
+    if (drawn_)
+      std::fputc('\n', stderr);
+    drawn_ = false;
   }
 
 private:
   Timer timer_;
   int frames_;
   bool enabled_;
+  bool drawn_ = false; ///< a line is drawn and not ended
 };
 
 /// The PNGs `output` names, OUT_%04d.png, as ffmpeg reads a sequence ('%' doubled).
@@ -336,25 +347,17 @@ std::optional<std::string> findOnPath(const std::string &program) {
   return std::nullopt;
 }
 
-/// Encodes the frames into `video` with `ffmpeg`. Throws std::runtime_error when it fails.
-void writeVideo(const std::string &ffmpeg, const std::string &output, const std::string &video, int fps) {
+/// Encodes the first `frames` frames into `video` with `ffmpeg` (frames beyond, left by an earlier longer
+/// movie of the same name, stay out). Throws std::runtime_error when it fails.
+void writeVideo(const std::string &ffmpeg, const std::string &output, const std::string &video, int frames,
+                int fps) {
   writeWhole(video, [&](const std::string &temporary) {
     const std::string pattern = ffmpegPattern(output);
     // yuv420p, which players expect, needs even sides.
-    std::vector<std::string> args = {ffmpeg,
-                                     "-nostdin",
-                                     "-y",
-                                     "-loglevel",
-                                     "error",
-                                     "-framerate",
-                                     std::to_string(fps),
-                                     "-i",
-                                     pattern,
-                                     "-vf",
-                                     "pad=ceil(iw/2)*2:ceil(ih/2)*2",
-                                     "-pix_fmt",
-                                     "yuv420p",
-                                     temporary};
+    std::vector<std::string> args = {ffmpeg, "-nostdin", "-y", "-loglevel", "error"};
+    args.insert(args.end(), {"-framerate", std::to_string(fps), "-i", pattern});
+    args.insert(args.end(), {"-frames:v", std::to_string(frames), "-vf", "pad=ceil(iw/2)*2:ceil(ih/2)*2"});
+    args.insert(args.end(), {"-pix_fmt", "yuv420p", temporary});
     std::vector<char *> argv;
     for (std::string &arg : args)
       argv.push_back(arg.data());
@@ -440,14 +443,19 @@ void renderMovie(const RenderOptions &view, const MovieOptions &movie, FrameSett
           renderer->setField(loaded->mesh, loaded->fieldIndex);
           update = StepUpdate::Reused;
           ++reused;
-        } catch (const Error &e) {
-          if (!reportedNewGrid)
-            std::fprintf(stderr, "uvr: time step %d: %s (and so for any later step whose grid changes)\n",
-                         step, e.what());
+        } catch (const Error &) { // the grid differs: loadForRendering chose a field that exists
+          if (!reportedNewGrid) {
+            progress.endLine();
+            std::fprintf(stderr,
+                         "uvr: time step %d: its points or cells differ from the step before: a new renderer "
+                         "is built for it (and for any later such step)\n",
+                         step);
+          }
           reportedNewGrid = true;
         }
       }
       if (update != StepUpdate::Reused) {
+        renderer.reset(); // first: the old and the new acceleration data need not fit together
         renderer = std::make_unique<VolumeRenderer>(loaded->mesh, loaded->fieldIndex, view.leafSize);
         renderer->prepare(settings.backend);
         renderer->setTransferFunction(colorMap, range);
@@ -495,7 +503,7 @@ void renderMovie(const RenderOptions &view, const MovieOptions &movie, FrameSett
   const std::optional<std::string> ffmpeg = findOnPath("ffmpeg");
   const std::string video = withoutExtension(outputs.output) + ".mp4";
   if (ffmpeg)
-    writeVideo(*ffmpeg, outputs.output, video, movie.fps);
+    writeVideo(*ffmpeg, outputs.output, video, plan.frames, movie.fps);
   const std::string written =
       ffmpegPattern(outputs.output) + (ffmpeg ? " and " + video : " (no ffmpeg: no video)");
   const std::string kept =
