@@ -4,7 +4,7 @@ the acceleration data (VolumeRenderer::setField), against a full load and build 
 --time-step K`, one process per step). Prints a Markdown table: per step the load, the acceleration update
 (setField) or build (build_ms + tf_update_ms), and the frame; medians over the steps after the first.
 
-  bench/movie_steps.py UVR SERIES.pvd [--field NAME] [--steps A:B] [--size WxH] [--backend cpu|cuda]
+  bench/movie_steps.py UVR SERIES.pvd [--field NAME] [--steps A:B] [--size WxH] [--backend cpu|cuda] [--runs N]
   bench/movie_steps.py UVR --brain-series MESH.vtu DIR [--count N] ...
 
 --brain-series first writes DIR/brain_K.vtu (K < N, default 4; point field T1 times a wave that moves with K,
@@ -75,22 +75,31 @@ def main():
     parser.add_argument("--steps", default="all")
     parser.add_argument("--size", default="512x512")
     parser.add_argument("--backend", default="cpu")
+    parser.add_argument("--runs", type=int, default=3)
     a = parser.parse_args()
     series = brain_series(*a.brain_series, a.count) if a.brain_series else a.series
     if not series:
         sys.exit("movie_steps: give SERIES.pvd or --brain-series MESH DIR")
     common = [series, "--size", a.size, "--backend", a.backend] + (["--field", a.field] if a.field else [])
 
-    movie = render(a.uvr, common + ["--time-step", a.steps])
-    frames = movie["frame_stats"]
-    fresh = [render(a.uvr, common + ["--time-step", str(f["time_step"])]) for f in frames]
+    # Each number the median of --runs runs (the machine may be shared: single runs vary by tens of per cent).
+    movies = [render(a.uvr, common + ["--time-step", a.steps]) for _ in range(a.runs)]
+    movie = movies[0]
+    frames = [{key: (statistics.median(m["frame_stats"][i][key] for m in movies)
+                     if isinstance(value, (int, float)) and not isinstance(value, bool) else value)
+               for key, value in frame.items()} for i, frame in enumerate(movie["frame_stats"])]
+    fresh = []
+    for f in frames:
+        runs = [render(a.uvr, common + ["--time-step", str(f["time_step"])]) for _ in range(a.runs)]
+        fresh.append({key: statistics.median(r[key] for r in runs)
+                      for key in ("load_ms", "build_ms", "tf_update_ms", "render_ms")})
     print(f"{series}: {movie['cells']} cells, {len(frames)} steps, {a.size}, backend {a.backend}, "
-          f"{movie['threads']} threads\n")
-    print("| step | load ms | reused: setField ms | fresh: build + tf ms | frame ms (movie / fresh) |")
+          f"{movie['threads']} threads, medians of {a.runs} runs\n")
+    print("| step | load ms (movie / fresh) | movie: setField ms | fresh: build + tf ms | frame ms (movie / fresh) |")
     print("|---:|---:|---:|---:|---:|")
     for f, single in zip(frames, fresh):
         update = f"{f['step_update_ms']:.1f}" if f["acceleration"] == "reused" else f"({f['acceleration']})"
-        print(f"| {f['time_step']} | {f['load_ms']:.1f} | {update} | "
+        print(f"| {f['time_step']} | {f['load_ms']:.1f} / {single['load_ms']:.1f} | {update} | "
               f"{single['build_ms'] + single['tf_update_ms']:.1f} | {f['render_ms']:.1f} / {single['render_ms']:.1f} |")
     later = [f for f in frames[1:] if f["acceleration"] == "reused"]
     if later:
