@@ -89,8 +89,9 @@ def main():
                      if isinstance(value, (int, float)) and not isinstance(value, bool) else value)
                for key, value in frame.items()} for i, frame in enumerate(movie["frame_stats"])]
     fresh = []
+    same_range = ["--range", repr(movie["range"][0]), repr(movie["range"][1])]  # the movie's, the first step's
     for f in frames:
-        runs = [render(a.uvr, common + ["--time-step", str(f["time_step"])]) for _ in range(a.runs)]
+        runs = [render(a.uvr, common + same_range + ["--time-step", str(f["time_step"])]) for _ in range(a.runs)]
         fresh.append({key: statistics.median(r[key] for r in runs)
                       for key in ("load_ms", "build_ms", "tf_update_ms", "render_ms")})
     print(f"{series}: {movie['cells']} cells, {len(frames)} steps, {a.size}, backend {a.backend}, "
