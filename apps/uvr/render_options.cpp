@@ -57,9 +57,10 @@ void addRenderOptions(CLI::App *cmd, RenderOptions &o, bool timeRanges) {
                   "such as data_%d.vtu)")
       ->required();
   if (timeRanges)
-    cmd->add_option("--time-step", o.timeSteps,
-                    "Time step of a file that has several, from 0; or a movie of the steps A to B (included) "
-                    "every STEP, A:B[:STEP], or of all of them: all")
+    cmd->add_option(
+           "--time-step", o.timeSteps,
+           "Time step of a file that has several, from 0; A:B[:STEP] (B included) or all: a movie of "
+           "those steps")
         ->check(CLI::Validator(
             [](std::string &text) -> std::string {
               try {
