@@ -7,6 +7,7 @@ option exit 2 naming it.
 
 Usage: test_movie_cli.py UVR_BINARY SHARED_DATA_DIR
 """
+import itertools
 import json
 import math
 import os
@@ -244,11 +245,11 @@ def test_errors(uvr, tmp):
     out = os.path.join(tmp, "bad.png")
     render = ["render", pvd, *SIZE, "-o", out]
 
-    written = []
+    numbers = itertools.count()
 
     def path_file(content):
-        written.append(content)
-        path = os.path.join(tmp, f"path{len(written)}.json")
+        """A keyframe file of its own: the cases run after all are listed."""
+        path = os.path.join(tmp, f"path{next(numbers)}.json")
         with open(path, "w") as f:
             f.write(content)
         return path
