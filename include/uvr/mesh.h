@@ -143,6 +143,9 @@ public:
   /// The default step s1: the edge of a cube of the median cell volume, about half a typical tet's edge, so
   /// that a ray takes about two samples per cell it crosses.
   float defaultStep() const;
+  /// The mean over the cells of log2 of the volume of each cell's box (as the partitions measure cells):
+  /// what steps that follow the mesh are scaled against; 0 for an empty mesh.
+  double meanCellSizeLog2() const;
   /// The most cells per partition that kAutoLeafSize stands for.
   uint32_t defaultLeafSize() const;
   /// The partitions a renderer makes of this mesh with `leafSize` (kAutoLeafSize: the default); builds them.

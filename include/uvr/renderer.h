@@ -50,6 +50,9 @@ struct FrameResult {
   Image image;                           ///< RGB composited over the background, top row first
   std::vector<float> opacity;            ///< accumulated opacity per pixel, row-major; empty unless kept
   std::vector<uint32_t> samplesPerPixel; ///< row-major; empty unless kept
+  /// Premultiplied red, green, blue and opacity per pixel, before the background, row-major, top row first;
+  /// empty unless FrameSettings::keepPremultipliedRgba.
+  std::vector<float> premultipliedRgba;
   FrameStats stats;
 };
 
@@ -57,6 +60,19 @@ struct FrameResult {
 /// constant field (min == max, or no finite values: {0, 0}) one of width max(1, |value| / 1000) centred on
 /// the value, so that the field shows in the preset's middle colour rather than at its transparent end.
 ValueRange defaultTransferRange(ValueRange fieldRange);
+
+/// What a renderer of one piece of a mesh split among processes (data-parallel rendering) takes from the
+/// whole mesh, so that its frames sample as the whole mesh's frames do and the pieces' frames composite to
+/// the whole mesh's.
+struct MeshPiece {
+  /// The region of space this piece draws (convex, disjoint from the other pieces' regions): rays are
+  /// clipped to it. The piece holds every cell that touches it.
+  Box3f region;
+  /// The whole mesh's bounds: rays' sample grids start where they enter them.
+  Box3f wholeBounds;
+  /// VolumeMesh::meanCellSizeLog2 of the whole mesh: steps that follow the mesh scale against it.
+  double wholeMeanCellSizeLog2 = 0.0;
+};
 
 /// Renders one field of a mesh. Built lazily, per backend, where it is first needed (prepare): tet
 /// adjacency, point-location hierarchy, occupancy and seed grids, and the partitions whose per-partition
@@ -68,6 +84,8 @@ public:
   /// Renders field `fieldIndex` of `mesh` (see VolumeMesh::chooseField) in partitions of at most `leafSize`
   /// cells. Keeps the mesh.
   VolumeRenderer(VolumeMesh mesh, int fieldIndex, uint32_t leafSize = kAutoLeafSize);
+  /// Renders `mesh` as `piece` of a larger mesh (see MeshPiece); pass the whole mesh's leaf size.
+  VolumeRenderer(VolumeMesh mesh, int fieldIndex, uint32_t leafSize, const MeshPiece &piece);
   ~VolumeRenderer();
   VolumeRenderer(VolumeRenderer &&) noexcept;
   VolumeRenderer &operator=(VolumeRenderer &&) noexcept;

@@ -8,6 +8,7 @@
 #include "mesh/cell.h"
 #include "mesh/mesh_view.h"
 
+#include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <vector>
@@ -130,9 +131,11 @@ struct StepScales {
 /// The partitions' step scales from the sums of cellSizeLog2 over each partition's `cellCounts` cells: the
 /// ratio of the geometric mean cell size in a partition to the mesh's, rounded to a power of two from 1/8 to
 /// 8 (a partition whose cells are within a factor of 1.41 of the mesh's keeps steps of s1). On the host for
-/// both builds, in integers to the rounding: both scale alike.
+/// both builds, in integers to the rounding: both scale alike. `reference`: the mesh's mean cellSizeLog2
+/// (MeshView::stepScaleReference), or NaN to take it from the sums.
 StepScales computeStepScales(const std::vector<int64_t> &sizeLog2Sums,
-                             const std::vector<uint64_t> &cellCounts, const std::vector<KdNode> &nodes);
+                             const std::vector<uint64_t> &cellCounts, const std::vector<KdNode> &nodes,
+                             double reference = NAN);
 
 /// The scalar range a cell contributes to its partitions: empty where it holds only NaN, [0, 0] for geometry
 /// alone (no field).

@@ -177,21 +177,22 @@ private:
 } // namespace
 
 StepScales computeStepScales(const std::vector<int64_t> &sizeLog2Sums,
-                             const std::vector<uint64_t> &cellCounts, const std::vector<KdNode> &nodes) {
+                             const std::vector<uint64_t> &cellCounts, const std::vector<KdNode> &nodes,
+                             double reference) {
   int64_t sum = 0;
   uint64_t count = 0;
   for (size_t i = 0; i < cellCounts.size(); ++i) {
     sum += sizeLog2Sums[i];
     count += cellCounts[i];
   }
+  const double mean = std::isnan(reference) ? double(sum) / double(count) : reference;
   StepScales scales;
   scales.partition.assign(cellCounts.size(), 1.f);
   for (size_t i = 0; i < cellCounts.size() && count > 0; ++i) {
     if (cellCounts[i] == 0)
       continue;
     // Volumes in 1/256ths of log2: a length ratio of 2 is 3 * 256 apart.
-    const double ratio =
-        (double(sizeLog2Sums[i]) / double(cellCounts[i]) - double(sum) / double(count)) / 768.0;
+    const double ratio = (double(sizeLog2Sums[i]) / double(cellCounts[i]) - mean) / 768.0;
     scales.partition[i] = std::ldexp(1.f, int(std::clamp(std::lround(ratio), -3l, 3l)));
   }
   scales.node.assign(nodes.size(), 1.f);
@@ -268,7 +269,7 @@ Partitions buildPartitions(const MeshView &mesh, uint32_t leafSize) {
     parts.cellCounts[i] = leaf.count;
     sizeLog2Sums[i] = leaf.sizeLog2Sum;
   });
-  StepScales scales = computeStepScales(sizeLog2Sums, parts.cellCounts, parts.nodes);
+  StepScales scales = computeStepScales(sizeLog2Sums, parts.cellCounts, parts.nodes, mesh.stepScaleReference);
   parts.stepScale = std::move(scales.partition);
   parts.nodeMaxStepScale = std::move(scales.node);
   parts.finestStepScale = scales.finest;

@@ -4,10 +4,14 @@
 #include "mesh/mesh_stats.h"
 #include <uvr/error.h>
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_reduce.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <functional>
 #include <limits>
 
 namespace uvr {
@@ -213,6 +217,23 @@ VolumeStats VolumeMesh::volumeStats() const {
 }
 
 float VolumeMesh::defaultStep() const { return defaultStepSize(volumeStats(), bounds()); }
+
+double VolumeMesh::meanCellSizeLog2() const {
+  const MeshView view = makeMeshView(impl_->mesh, -1);
+  const uint64_t count = view.cellCount();
+  if (count == 0)
+    return 0.0;
+  const int64_t sum = tbb::parallel_reduce(
+      tbb::blocked_range<uint64_t>(0, count), int64_t(0),
+      [&](const tbb::blocked_range<uint64_t> &range, int64_t partial) {
+        for (uint64_t c = range.begin(); c < range.end(); ++c)
+          partial += cellSizeLog2(cellBounds(view, c));
+        return partial;
+      },
+      std::plus<int64_t>());
+  // cellSizeLog2 counts 1/256ths; the partitions compare means of these as this division gives them.
+  return double(sum) / double(count) / 256.0;
+}
 
 uint32_t VolumeMesh::defaultLeafSize() const { return uvr::defaultLeafSize(cellCount()); }
 

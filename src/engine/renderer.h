@@ -27,12 +27,14 @@ struct RenderSettings {
   /// copies each one back to the host.
   bool keepOpacity = true;
   bool keepSamplesPerPixel = true;
+  bool keepPremultipliedRgba = false;
 };
 
 struct Frame {
   Image image;
   std::vector<float> opacity; ///< accumulated opacity per pixel, row-major, top row first; or empty
   std::vector<uint32_t> samplesPerPixel; ///< row-major, top row first; or empty
+  std::vector<float> premultipliedRgba;  ///< 4 per pixel, before the background, row-major; or empty
   uint64_t samplesTotal = 0;
   uint32_t samplesMax = 0;
   double kernelMs = 0.0; ///< the GPU time of the frame's kernels (CUDA), without copies; 0 on the CPU
@@ -48,6 +50,11 @@ public:
   /// `leafSize` cells (kAutoLeafSize: defaultLeafSize). Nothing is built until a backend is prepared.
   Renderer(const Mesh &mesh, int fieldIndex, uint32_t leafSize = kAutoLeafSize);
   ~Renderer();
+
+  /// Renders the mesh as one piece of a larger one, before any backend is prepared: rays are clipped to
+  /// `region` and sample on the grid of the whole mesh's bounds `wholeBounds`, and partitions scale their
+  /// steps against the whole mesh's mean cell size `meanCellSizeLog2` (see uvr::MeshPiece).
+  void setPiece(const Box3f &region, const Box3f &wholeBounds, double meanCellSizeLog2);
 
   /// Replaces the transfer function and recomputes the partitions' metadata on every backend prepared; a
   /// backend prepared later takes it then. The mesh is not touched.
@@ -98,8 +105,9 @@ private:
 
   const Mesh &mesh_;
   MeshView meshView_;
-  float diagonal_ = 0.f; ///< of the mesh bounds
-  Vec3f center_;         ///< of the mesh bounds
+  float diagonal_ = 0.f;      ///< of the mesh bounds
+  Vec3f center_;              ///< of the mesh bounds
+  Box3f region_, gridBounds_; ///< a piece's (setPiece); empty for a whole mesh
   uint32_t leafSize_;
   std::optional<TransferFunction> tf_;
   uint32_t transparentPartitions_ = 0;

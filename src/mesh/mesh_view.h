@@ -5,6 +5,7 @@
 #include "core/vec.h"
 #include "mesh/mesh.h"
 
+#include <cmath>
 #include <cstdint>
 
 namespace uvr {
@@ -21,6 +22,9 @@ struct MeshView {
   uint64_t hexCount = 0;
   const float *values = nullptr; ///< the rendered field, per point or per cell
   bool cellCentered = false;
+  /// The mean cellSizeLog2 that partitions' step scales compare theirs with: NaN for this mesh's own, the
+  /// whole mesh's for a piece of one (MeshPiece).
+  double stepScaleReference = NAN;
 
   UVR_HOST_DEVICE uint64_t cellCount() const { return tetCount + pyramidCount + wedgeCount + hexCount; }
 };
