@@ -2,8 +2,8 @@
 
 #include <algorithm>
 #include <cstdint>
-#include <numeric>
 #include <span>
+#include <vector>
 
 namespace uvr {
 
@@ -48,115 +48,59 @@ bool touches(const Box3f &a, const Box3f &b) {
          b.lower.y <= a.upper.y && a.lower.z <= b.upper.z && b.lower.z <= a.upper.z;
 }
 
-struct Splitter {
-  RegionTree &tree;
-  std::vector<Vec3f> &centroids;
-
-  int split(const Box3f &space, size_t begin, size_t end, int firstRegion, int count) {
-    const int node = int(tree.nodes.size());
-    tree.nodes.emplace_back();
-    if (count == 1 || end - begin < 2) {
-      // A region per rank even where the cells run out: the extra ones are empty.
-      tree.nodes[size_t(node)].region = firstRegion;
-      tree.regions[size_t(firstRegion)] = space;
-      for (int r = 1; r < count; ++r) {
-        tree.regions[size_t(firstRegion + r)] = Box3f{}; // empty: draws nothing
-      }
-      return node;
-    }
-    Box3f spread;
-    for (size_t i = begin; i < end; ++i)
-      spread.extend(centroids[i]);
-    const Vec3f size = spread.upper - spread.lower;
-    const int axis = size.x >= size.y && size.x >= size.z ? 0 : size.y >= size.z ? 1 : 2;
-    const int below = count / 2;
-    const size_t middle = begin + (end - begin) * size_t(below) / size_t(count);
-    std::nth_element(centroids.begin() + std::ptrdiff_t(begin), centroids.begin() + std::ptrdiff_t(middle),
-                     centroids.begin() + std::ptrdiff_t(end),
-                     [axis](const Vec3f &a, const Vec3f &b) { return a[axis] < b[axis]; });
-    const float at = centroids[middle][axis];
-    Box3f lower = space, upper = space;
-    lower.upper[axis] = at;
-    upper.lower[axis] = at;
-    const int belowNode = split(lower, begin, middle, firstRegion, below);
-    const int aboveNode = split(upper, middle, end, firstRegion + below, count - below);
-    RegionTree::Node &n = tree.nodes[size_t(node)];
-    n.axis = axis;
-    n.split = at;
-    n.below = belowNode;
-    n.above = aboveNode;
-    return node;
-  }
-};
-
-void orderFrom(const RegionTree &tree, int node, Vec3f eye, std::vector<int> &order) {
-  const RegionTree::Node &n = tree.nodes[size_t(node)];
-  if (n.axis < 0) {
-    order.push_back(n.region);
-    return;
-  }
-  // The eye's side first: no ray from the eye crosses the plane back towards it.
-  const bool eyeBelow = eye[n.axis] < n.split;
-  orderFrom(tree, eyeBelow ? n.below : n.above, eye, order);
-  orderFrom(tree, eyeBelow ? n.above : n.below, eye, order);
-}
-
 } // namespace
 
-RegionTree splitIntoRegions(const VolumeMesh &mesh, int count) {
-  const std::span<const Vec3f> points = mesh.points();
-  std::vector<Vec3f> centroids;
-  centroids.reserve(mesh.cellCount());
-  forEachCell(mesh, [&](uint64_t, CellType, std::span<const uint32_t> corners) {
-    Vec3f sum{0.f, 0.f, 0.f};
-    for (const uint32_t v : corners)
-      sum = sum + points[v];
-    centroids.push_back(sum * (1.f / float(corners.size())));
-  });
-  // Far past the bounds: the outer faces of the outer regions never cut a ray's part inside the mesh.
-  const Box3f bounds = mesh.bounds();
-  const float reach = length(bounds.upper - bounds.lower) + 1.f;
-  Box3f space = bounds;
-  space.lower = space.lower - Vec3f{reach, reach, reach};
-  space.upper = space.upper + Vec3f{reach, reach, reach};
-  RegionTree tree;
-  tree.regions.resize(size_t(count));
-  Splitter{tree, centroids}.split(space, 0, centroids.size(), 0, count);
-  return tree;
-}
+namespace {
 
-VolumeMesh meshPiece(const VolumeMesh &mesh, int fieldIndex, const Box3f &region) {
+/// The cells for which `keep(cornerBox)` holds, with fields `fields`.
+template <class Keep>
+VolumeMesh selectCells(const VolumeMesh &mesh, const std::vector<int> &fields, const Keep &keep) {
   const std::span<const Vec3f> points = mesh.points();
-  const FieldInfo field = mesh.field(fieldIndex);
-  const std::span<const float> values = mesh.fieldValues(fieldIndex);
   std::vector<int64_t> offsets{0}, connectivity;
   std::vector<uint8_t> types;
-  std::vector<float> cellValues;
+  std::vector<std::vector<float>> cellValues(fields.size());
   forEachCell(mesh, [&](uint64_t cell, CellType type, std::span<const uint32_t> corners) {
-    if (region.empty() || !touches(cornerBounds(points, corners), region))
+    if (!keep(cornerBounds(points, corners)))
       return;
     for (const uint32_t v : corners)
       connectivity.push_back(int64_t(v));
     offsets.push_back(int64_t(connectivity.size()));
     types.push_back(uint8_t(type));
-    if (field.centering == Centering::Cell)
-      cellValues.push_back(values[cell]);
+    for (size_t f = 0; f < fields.size(); ++f)
+      if (mesh.field(fields[f]).centering == Centering::Cell)
+        cellValues[f].push_back(mesh.fieldValues(fields[f])[cell]);
   });
   MeshArrays arrays;
   arrays.points = ArrayView(std::span<const float>(&points.data()->x, 3 * points.size()), 3);
   arrays.offsets = offsets;
   arrays.connectivity = connectivity;
   arrays.types = types;
-  arrays.fields.push_back(
-      {field.name, field.centering,
-       ArrayView(field.centering == Centering::Cell ? std::span<const float>(cellValues) : values)});
+  for (size_t f = 0; f < fields.size(); ++f) {
+    const FieldInfo field = mesh.field(fields[f]);
+    const bool perCell = field.centering == Centering::Cell;
+    arrays.fields.push_back(
+        {field.name, field.centering,
+         ArrayView(perCell ? std::span<const float>(cellValues[f]) : mesh.fieldValues(fields[f]))});
+  }
   return VolumeMesh::fromArrays(arrays, mesh.source());
 }
 
-std::vector<int> visibilityOrder(const RegionTree &tree, Vec3f eye) {
-  std::vector<int> order;
-  orderFrom(tree, 0, eye, order);
-  return order;
+} // namespace
+
+VolumeMesh meshPiece(const VolumeMesh &mesh, int fieldIndex, const Box3f &region) {
+  return selectCells(mesh, {fieldIndex},
+                     [&](const Box3f &box) { return !region.empty() && touches(box, region); });
+}
+
+VolumeMesh ownedCells(const VolumeMesh &mesh, const Box3f &region) {
+  std::vector<int> fields(size_t(mesh.fieldCount()));
+  for (int f = 0; f < mesh.fieldCount(); ++f)
+    fields[size_t(f)] = f;
+  return selectCells(mesh, fields, [&](const Box3f &box) {
+    const Vec3f c = box.center();
+    return region.lower.x <= c.x && c.x < region.upper.x && region.lower.y <= c.y && c.y < region.upper.y &&
+           region.lower.z <= c.z && c.z < region.upper.z;
+  });
 }
 
 } // namespace uvr

@@ -76,8 +76,8 @@ uint64_t MpiGroup::composite(std::vector<float> &rgba, int width, int height, co
   // Rank r composites rows [band[r], band[r + 1]).
   const auto band = [&](int r) { return int(int64_t(height) * r / size_); };
   const int rowFloats = 4 * width;
-  std::vector<int> sendCounts(size_t(size_)), sendOffsets(size_t(size_)), receiveCounts(size_t(size_)),
-      receiveOffsets(size_t(size_));
+  const size_t ranks = size_t(size_);
+  std::vector<int> sendCounts(ranks), sendOffsets(ranks), receiveCounts(ranks), receiveOffsets(ranks);
   const int myRows = band(rank_ + 1) - band(rank_);
   for (int r = 0; r < size_; ++r) {
     sendCounts[size_t(r)] = (band(r + 1) - band(r)) * rowFloats;
@@ -99,6 +99,11 @@ uint64_t MpiGroup::composite(std::vector<float> &rgba, int width, int height, co
   for (const int r : order) {
     const float *layer = received.data() + size_t(r) * bandFloats;
     for (size_t i = 0; i < bandFloats; i += 4) {
+      // A ray stops once this opaque (the renderer's early termination): so does the composite, else the
+      // regions behind would add what a single process leaves out.
+      constexpr float kTerminationOpacity = 0.99f;
+      if (composited[i + 3] >= kTerminationOpacity)
+        continue;
       const float through = 1.f - composited[i + 3];
       for (size_t c = 0; c < 4; ++c)
         composited[i + c] += through * layer[i + c];

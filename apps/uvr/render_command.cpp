@@ -164,7 +164,7 @@ void runRenderParallel(const RenderCommandOptions &o) {
   // What depends on the whole mesh comes from it: defaults, value range, camera, leaf size, the split.
   std::optional<VolumeRenderer> renderer;
   Camera camera;
-  RegionTree regions;
+  MeshRegions regions;
   uint64_t wholeCells = 0;
   Box3f wholeBounds;
   const double loadMs = loaded->loadMs;
@@ -186,7 +186,8 @@ void runRenderParallel(const RenderCommandOptions &o) {
     camera = chooseCamera(o.view, whole);
     regions = splitIntoRegions(whole, group.size());
     const uint32_t leafSize = o.view.leafSize != kAutoLeafSize ? o.view.leafSize : whole.defaultLeafSize();
-    const MeshPiece piece{regions.regions[size_t(group.rank())], whole.bounds(), whole.meanCellSizeLog2()};
+    const MeshPiece piece{regions.regions[size_t(group.rank())], whole.bounds(),
+                          whole.stepScaleReference(leafSize)};
     VolumeMesh part = meshPiece(whole, loaded->fieldIndex, piece.region);
     loaded.reset(); // the piece is all this rank keeps
     if (settings.backend == Backend::Cuda)
@@ -199,7 +200,7 @@ void runRenderParallel(const RenderCommandOptions &o) {
   settings.keepOpacity = false;
   settings.keepSamplesPerPixel = !o.heatmap.empty();
   settings.keepPremultipliedRgba = true;
-  const std::vector<int> order = visibilityOrder(regions, camera.eye);
+  const std::vector<int> order = regions.frontToBack(camera.eye);
   std::vector<double> frameTimes, rankTimes, compositeTimes;
   FrameResult frame;
   double tfUpdateMs = 0.0;

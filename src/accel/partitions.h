@@ -71,8 +71,24 @@ template <typename Storage> struct PartitionArrays {
 };
 using Partitions = PartitionArrays<HostStorage>;
 
-/// Median-split KD-tree over cell centroids until a leaf holds at most `leafSize` cells.
-Partitions buildPartitions(const MeshView &mesh, uint32_t leafSize);
+/// Median-split KD-tree over cell centroids until a leaf holds at most `leafSize` cells. `stepScaleMean`,
+/// where given, takes the mean cellSizeLog2 the step scales compare with (StepScales::mean).
+Partitions buildPartitions(const MeshView &mesh, uint32_t leafSize, double *stepScaleMean = nullptr);
+
+/// The top levels of the tree buildPartitions makes of `mesh`, down to `count` regions (for a power of 2, the
+/// same median splits; otherwise split in proportion to the regions on each side), for the pieces of a mesh
+/// split among processes: inner nodes first as the tree lays them out, and each region's box.
+struct RegionSplit {
+  struct Node {
+    int axis = -1; ///< -1 for a region
+    float position = 0.f;
+    int below = -1, above = -1; ///< children: axis < position, axis >= position
+    int region = -1;
+  };
+  std::vector<Node> nodes; ///< the root first
+  std::vector<Box3f> regions;
+};
+RegionSplit splitRegions(const MeshView &mesh, int count);
 
 /// The default `leafSize` makes about this many partitions (the median splits make 1-2 times as many leaves),
 /// of at least kSmallestDefaultLeafSize cells (docs/design.md, "Choosing defaults"): a partition costs more
@@ -126,6 +142,7 @@ UVR_HOST_DEVICE inline int32_t cellSizeLog2(const Box3f &box) {
 struct StepScales {
   std::vector<float> partition, node; ///< PartitionArrays::stepScale and nodeMaxStepScale
   float finest = 1.f;
+  double mean = 0.0; ///< the mesh's mean cellSizeLog2 the scales compare with
 };
 
 /// The partitions' step scales from the sums of cellSizeLog2 over each partition's `cellCounts` cells: the

@@ -76,7 +76,8 @@ struct VolumeRenderer::Impl {
       : mesh(std::move(handle)), fieldIndex(field), renderer(detail::Access::mesh(mesh), field, leafSize) {}
   Impl(VolumeMesh handle, int field, uint32_t leafSize, const MeshPiece &piece)
       : Impl(std::move(handle), field, leafSize) {
-    renderer.setPiece(piece.region, piece.wholeBounds, piece.wholeMeanCellSizeLog2);
+    renderer.setPiece(piece.region, piece.wholeBounds, piece.wholeStepScales.meanCellSizeLog2,
+                      piece.wholeStepScales.finestStepScale);
   }
 };
 

@@ -20,7 +20,8 @@ Renderer::Renderer(const Mesh &mesh, int fieldIndex, uint32_t leafSize) : mesh_(
 
 Renderer::~Renderer() = default;
 
-void Renderer::setPiece(const Box3f &region, const Box3f &wholeBounds, double meanCellSizeLog2) {
+void Renderer::setPiece(const Box3f &region, const Box3f &wholeBounds, double meanCellSizeLog2,
+                        float finestStepScale) {
   if (prepared(Backend::Cpu) || prepared(Backend::Cuda))
     throw Error("a renderer's piece is set before its backends are prepared");
   if (region.empty() || wholeBounds.empty())
@@ -30,7 +31,10 @@ void Renderer::setPiece(const Box3f &region, const Box3f &wholeBounds, double me
   gridBounds_ = padded(wholeBounds, partitionPadding(wholeBounds));
   diagonal_ = length(wholeBounds.upper - wholeBounds.lower);
   center_ = wholeBounds.center();
-  meshView_.stepScaleReference = 256.0 * meanCellSizeLog2; // cellSizeLog2 counts 1/256ths
+  meshView_.stepScaleReference = meanCellSizeLog2;
+  wholeFinestStepScale_ = finestStepScale;
+  meshView_.pieceRegion = region;
+  meshView_.pieceWholeBounds = wholeBounds;
 }
 
 void Renderer::setTransferFunction(TransferFunction tf) {
@@ -144,6 +148,7 @@ void Renderer::render(const Camera &camera, const RenderSettings &settings, Fram
   derived.finestStepSigma = finestStepSigma(s.s1, s.s2, s.p);
   derived.clip = region_;
   derived.gridBounds = gridBounds_;
+  derived.finestStepScale = wholeFinestStepScale_;
   const SampleTotals samples =
       backend(settings.backend)
           .render(makeCameraView(camera, settings.width, settings.height), derived, target, frame.kernelMs);

@@ -52,9 +52,11 @@ public:
   ~Renderer();
 
   /// Renders the mesh as one piece of a larger one, before any backend is prepared: rays are clipped to
-  /// `region` and sample on the grid of the whole mesh's bounds `wholeBounds`, and partitions scale their
-  /// steps against the whole mesh's mean cell size `meanCellSizeLog2` (see uvr::MeshPiece).
-  void setPiece(const Box3f &region, const Box3f &wholeBounds, double meanCellSizeLog2);
+  /// `region` and sample on the grid of the whole mesh's bounds `wholeBounds`, the partitions are the whole
+  /// mesh's within the region (on the host's build) and scale their steps against the whole mesh's mean cell
+  /// size `meanCellSizeLog2`, on a grid of its finest step scale `finestStepScale` (see uvr::MeshPiece).
+  void setPiece(const Box3f &region, const Box3f &wholeBounds, double meanCellSizeLog2,
+                float finestStepScale);
 
   /// Replaces the transfer function and recomputes the partitions' metadata on every backend prepared; a
   /// backend prepared later takes it then. The mesh is not touched.
@@ -73,6 +75,7 @@ public:
   /// Whether `backend` has been prepared. The reads below that name a backend throw uvr::Error where not.
   bool prepared(Backend backend) const;
   uint32_t partitionCount(Backend backend) const;
+
   /// Milliseconds the acceleration build for `backend` took (on the GPU for CUDA, the mesh's upload
   /// excluded).
   double buildMs(Backend backend) const;
@@ -108,6 +111,7 @@ private:
   float diagonal_ = 0.f;      ///< of the mesh bounds
   Vec3f center_;              ///< of the mesh bounds
   Box3f region_, gridBounds_; ///< a piece's (setPiece); empty for a whole mesh
+  float wholeFinestStepScale_ = 0.f;
   uint32_t leafSize_;
   std::optional<TransferFunction> tf_;
   uint32_t transparentPartitions_ = 0;

@@ -25,6 +25,10 @@ struct MeshView {
   /// The mean cellSizeLog2 that partitions' step scales compare theirs with: NaN for this mesh's own, the
   /// whole mesh's for a piece of one (MeshPiece).
   double stepScaleReference = NAN;
+  /// For a piece of a mesh: its region and the whole mesh's bounds (empty for a whole mesh). Its partitions
+  /// are then the whole mesh's within the region: the tree is built over the cells whose centroids lie in
+  /// it, from the region's box down, padded as the whole mesh's.
+  Box3f pieceRegion, pieceWholeBounds;
 
   UVR_HOST_DEVICE uint64_t cellCount() const { return tetCount + pyramidCount + wedgeCount + hexCount; }
 };

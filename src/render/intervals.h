@@ -48,6 +48,9 @@ struct IntegratorSettings {
   /// it enters `gridBounds` (the whole mesh's root bounds) and only its part inside `clip` (the piece's
   /// region) is marched, so that the pieces take the whole mesh's samples, each once.
   Box3f gridBounds, clip;
+  /// A piece's: the whole mesh's finest step scale, which sets the grid's spacing where steps follow the
+  /// mesh; 0 for the partitions' own.
+  float finestStepScale = 0.f;
 };
 
 /// The paper's step size for a partition of normalised deviation `sigma` (§2.4).
@@ -61,10 +64,16 @@ inline float finestStepSigma(float s1, float s2, float p) {
   return s2 > s1 ? 1.f - powf(0.5f * s1 / (s2 - s1), 1.f / p) : -INFINITY;
 }
 
+/// The finest step scale: the partitions', or a piece's whole mesh's.
+UVR_HOST_DEVICE inline float finestStepScale(const IntegratorSettings &settings,
+                                             const PartitionsView &partitions) {
+  return settings.finestStepScale > 0.f ? settings.finestStepScale : partitions.finestStepScale;
+}
+
 /// The spacing of a ray's sample grid: s1, or where steps follow the mesh, s1 at the finest step scale.
 UVR_HOST_DEVICE inline float gridSpacing(const IntegratorSettings &settings,
                                          const PartitionsView &partitions) {
-  return settings.followMesh ? settings.s1 * partitions.finestStepScale : settings.s1;
+  return settings.followMesh ? settings.s1 * finestStepScale(settings, partitions) : settings.s1;
 }
 
 /// The points a ray's samples lie on, t = origin + k * spacing, from where the ray enters the mesh bounds,
@@ -197,7 +206,7 @@ private:
     const float sigma = scene_.nodeMinSigma[node];
     return sigma != kTransparentSigma && takesFinestStep(sigma) &&
            (!settings_.followMesh ||
-            scene_.partitions.nodeMaxStepScale[node] <= scene_.partitions.finestStepScale);
+            scene_.partitions.nodeMaxStepScale[node] <= finestStepScale(settings_, scene_.partitions));
   }
 
   const SceneView &scene_;
