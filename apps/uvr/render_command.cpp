@@ -128,10 +128,6 @@ void runRender(const RenderCommandOptions &o) {
     stats["frames"] = o.frames;
     if (settings.backend == Backend::Cuda)
       stats["gpu_kernel_ms"] = median(kernelTimes);
-    stats["ranks"] = 1;
-    stats["rank_render_ms"] = {renderMs};
-    stats["composite_ms"] = 0.0;
-    stats["composite_bytes"] = 0;
     writeStats(o.stats, stats);
   }
   if (!o.heatmap.empty()) {
