@@ -80,6 +80,9 @@ struct FrameSettings {
   Backend backend = Backend::Cpu;
   bool keepOpacity = true;         ///< return the accumulated opacity per pixel
   bool keepSamplesPerPixel = true; ///< return the samples taken per pixel
+  /// Return the premultiplied colour and opacity per pixel as floats, before the background: what frames of
+  /// several pieces of a mesh are composited from.
+  bool keepPremultipliedRgba = false;
 };
 
 /// `settings` with its defaults filled in (0 for s1, s2, p or unit) for a mesh of default step `defaultStep`
