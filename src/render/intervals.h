@@ -95,7 +95,7 @@ public:
     // No early return: the fields then take one value on every path, which leaves the GPU's kernel fewer
     // values to keep (it spilled more with returns here).
     float tEnter;
-    const bool hit = intersectBox(ray, scene.partitions.rootBounds, 0.f, INFINITY, tEnter, tExit_);
+    const bool hit = intersectBox(ray, scene.partitions.rootBounds, 0.f, ray.tMax, tEnter, tExit_);
     grid_ = {tEnter, gridSpacing(settings, scene.partitions)};
     skip_ = skipsSpace(settings.mode);
     adaptive_ = samplesAdaptively(settings.mode);
