@@ -96,7 +96,8 @@ PYBIND11_MODULE(vtk, m) {
         configure(m, mode, s1, s2, p, useCuda);
       },
       "mapper"_a, py::kw_only(), "mode"_a = none, "s1"_a = none, "s2"_a = none, "p"_a = none,
-      "use_cuda"_a = none, "Changes uvr's settings of a mapper made by VolumeMapper(); None leaves one as it is.");
+      "use_cuda"_a = none,
+      "Changes uvr's settings of a mapper made by VolumeMapper(); None leaves one as it is.");
   m.def(
       "options",
       [](const py::object &mapper) {
@@ -113,6 +114,7 @@ PYBIND11_MODULE(vtk, m) {
                         "render_ms"_a = m->GetLastRenderMs(), "backend"_a = m->GetLastBackend());
       },
       "mapper"_a,
-      "The last frame of a mapper made by VolumeMapper(): builds (how often the acceleration data was built), "
+      "The last frame of a mapper made by VolumeMapper(): builds (how often the acceleration data was "
+      "built), "
       "build_ms, render_ms (uvr's frame alone) and backend.");
 }

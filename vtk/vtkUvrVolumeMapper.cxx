@@ -153,7 +153,8 @@ void vtkUvrVolumeMapper::Render(vtkRenderer *ren, vtkVolume *vol) {
   vtkCamera *cam = ren->GetActiveCamera();
   if (cam->GetParallelProjection()) {
     if (!in.warnedParallel)
-      vtkWarningMacro(<< "uvr renders perspective views only: the volume is not drawn in parallel projection");
+      vtkWarningMacro(
+          << "uvr renders perspective views only: the volume is not drawn in parallel projection");
     in.warnedParallel = true;
     return;
   }
@@ -178,8 +179,8 @@ void vtkUvrVolumeMapper::Render(vtkRenderer *ren, vtkVolume *vol) {
       arrays.connectivity = viewIds(cells->GetConnectivityArray(), connectivityCopy);
       arrays.types = {types->GetPointer(0), size_t(types->GetNumberOfTuples())};
       const std::string name = scalars->GetName() ? scalars->GetName() : "scalars";
-      arrays.fields.push_back(
-          {name, centering == 1 ? uvr::Centering::Cell : uvr::Centering::Point, viewArray(scalars, fieldCopy)});
+      arrays.fields.push_back({name, centering == 1 ? uvr::Centering::Cell : uvr::Centering::Point,
+                               viewArray(scalars, fieldCopy)});
       in.renderer.reset();
       in.renderer.emplace(uvr::VolumeMesh::fromArrays(arrays, "the vtkUnstructuredGrid"), 0);
       in.meshKey = meshKey;
@@ -205,7 +206,8 @@ void vtkUvrVolumeMapper::Render(vtkRenderer *ren, vtkVolume *vol) {
         color->GetRange(colorRange);
       else
         greyFunction->GetRange(colorRange);
-      uvr::ValueRange span{float(std::min(range[0], colorRange[0])), float(std::max(range[1], colorRange[1]))};
+      uvr::ValueRange span{float(std::min(range[0], colorRange[0])),
+                           float(std::max(range[1], colorRange[1]))};
       if (!(span.min < span.max))
         span = uvr::defaultTransferRange(span);
       std::vector<uvr::Vec4f> table(kTableSize);

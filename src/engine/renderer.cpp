@@ -129,8 +129,8 @@ void Renderer::render(const Camera &camera, const RenderSettings &settings, Fram
   derived.finestStepSigma = finestStepSigma(s.s1, s.s2, s.p);
   const SampleTotals samples =
       backend(settings.backend)
-          .render(makeCameraView(camera, settings.width, settings.height, settings.rayLimits), derived, target,
-                  frame.kernelMs);
+          .render(makeCameraView(camera, settings.width, settings.height, settings.rayLimits), derived,
+                  target, frame.kernelMs);
   frame.samplesTotal = samples.total;
   frame.samplesMax = samples.max;
 }

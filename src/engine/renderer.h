@@ -27,7 +27,8 @@ struct RenderSettings {
   /// copies each one back to the host.
   bool keepOpacity = true;
   bool keepSamplesPerPixel = true;
-  /// Null, or width x height distances, top row first, where each pixel's ray ends (FrameSettings::rayLimits).
+  /// Null, or width x height distances, top row first, where each pixel's ray ends
+  /// (FrameSettings::rayLimits).
   const float *rayLimits = nullptr;
 };
 

@@ -30,8 +30,7 @@ struct CameraView {
   }
 };
 
-inline CameraView makeCameraView(const Camera &camera, int width, int height,
-                                 const float *limits = nullptr) {
+inline CameraView makeCameraView(const Camera &camera, int width, int height, const float *limits = nullptr) {
   CameraView view;
   view.eye = camera.eye;
   view.forward = normalize(camera.at - camera.eye);
