@@ -38,15 +38,22 @@ namespace {
 // Enough entries that a function's control points are resolved to a 1/1024 of its range.
 constexpr int kTableSize = 1024;
 
+// An array (or vtkPoints) and its modification time: a pipeline's shallow copies share these, not the data
+// objects that hold them.
+struct ArrayKey {
+  const void *array = nullptr;
+  vtkMTimeType time = 0;
+  explicit ArrayKey(vtkObject *a = nullptr) : array(a), time(a ? a->GetMTime() : 0) {}
+  bool operator==(const ArrayKey &) const = default;
+};
+
 struct MeshKey {
-  const void *grid = nullptr;
-  vtkMTimeType points = 0, cells = 0, types = 0;
+  ArrayKey points, offsets, connectivity, types;
   bool operator==(const MeshKey &) const = default;
 };
 
 struct FieldKey {
-  const void *array = nullptr;
-  vtkMTimeType time = 0;
+  ArrayKey values;
   int centering = -1;
   bool operator==(const FieldKey &) const = default;
 };
@@ -165,14 +172,14 @@ void vtkUvrVolumeMapper::Render(vtkRenderer *ren, vtkVolume *vol) {
 
   try {
     // The mesh and its field: built again only when the grid's points, cells or scalars changed.
-    const MeshKey meshKey{grid, grid->GetPoints()->GetMTime(), grid->GetCells()->GetMTime(),
-                          grid->GetCellTypesArray()->GetMTime()};
-    const FieldKey fieldKey{scalars, scalars->GetMTime(), centering};
+    vtkCellArray *cells = grid->GetCells();
+    vtkUnsignedCharArray *types = grid->GetCellTypesArray();
+    const MeshKey meshKey{ArrayKey(grid->GetPoints()), ArrayKey(cells->GetOffsetsArray()),
+                          ArrayKey(cells->GetConnectivityArray()), ArrayKey(types)};
+    const FieldKey fieldKey{ArrayKey(scalars), centering};
     if (!in.renderer || !(meshKey == in.meshKey) || !(fieldKey == in.fieldKey)) {
       std::vector<float> pointCopy, fieldCopy;
       std::vector<int64_t> offsetCopy, connectivityCopy;
-      vtkCellArray *cells = grid->GetCells();
-      vtkUnsignedCharArray *types = grid->GetCellTypesArray();
       uvr::MeshArrays arrays;
       arrays.points = viewArray(grid->GetPoints()->GetData(), pointCopy);
       arrays.offsets = viewIds(cells->GetOffsetsArray(), offsetCopy);
