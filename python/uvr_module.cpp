@@ -326,6 +326,18 @@ public:
     renderer_->prepare(backendKind_);
   }
 
+  /// Renders `field` of `mesh`, whose points and cells must be this renderer's, keeping the acceleration
+  /// data.
+  void setField(std::shared_ptr<PyMesh> mesh, const std::optional<std::string> &field) {
+    const int fieldIndex = mesh->mesh.chooseField(field.value_or(""));
+    {
+      py::gil_scoped_release release;
+      const std::lock_guard<std::mutex> lock(frameMutex_);
+      renderer_->setField(mesh->mesh, fieldIndex);
+    }
+    mesh_ = std::move(mesh);
+  }
+
   Camera defaultCamera(float fovy, float aspect, const std::string &view) const {
     return frameBounds(mesh_->mesh.bounds(), view, fovy, aspect);
   }
@@ -633,6 +645,10 @@ PYBIND11_MODULE(uvr, m) {
            py::arg("steps") = "auto",
            "Returns an (h, w, 4) uint8 array: RGB composited over the background, and accumulated opacity x "
            "255")
+      .def("set_field", &PyRenderer::setField, py::arg("mesh"), py::arg("field") = py::none(),
+           "Renders `field` of `mesh` (a later time step, or other values on the same grid) keeping the "
+           "acceleration data: only the partitions' value ranges are recomputed. Its points and cells must "
+           "be this renderer's, in the same order; uvr.Error otherwise")
       .def("default_camera", &PyRenderer::defaultCamera, py::arg("fovy") = 30.f, py::arg("aspect") = 1.f,
            py::arg("view") = "+z",
            "ParaView's reset camera for an image of this aspect (width / height) from the named view "

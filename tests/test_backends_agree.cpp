@@ -1,5 +1,6 @@
 // The CUDA backend against the CPU one, frame by frame, on every cell type and mode. Runs where a GPU is.
 #include "engine/renderer.h"
+#include "mesh/cell_neighbors.h"
 #include "mesh/procedural_mesh.h"
 #include "mesh/tet_neighbors.h"
 #include <uvr/error.h>
@@ -8,6 +9,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <random>
 
 using namespace uvr;
@@ -97,6 +99,12 @@ TEST(BackendsAgree, CudaBuildsTheHostsAccelerationData) {
       EXPECT_TRUE(sameBox(device.partitions.rootBounds, host.rootBounds));
       expectSameTree(host, 0, device.partitions, 0);
       EXPECT_EQ(device.tetNeighbors, buildTetNeighbors(mesh));
+      // The other cells' walk aids: the host's, uploaded.
+      EXPECT_EQ(device.cellNeighbors, buildCellNeighbors(mesh));
+      const std::vector<Vec4f> planes = buildCellFacePlanes(view);
+      ASSERT_EQ(device.cellFacePlanes.size(), planes.size());
+      EXPECT_EQ(std::memcmp(device.cellFacePlanes.data(), planes.data(), planes.size() * sizeof(Vec4f)), 0);
+      EXPECT_EQ(device.cellNeighbors.empty(), type == CellType::Tetra);
       const OccupancyGrid grid = buildOccupancyGrid(view);
       EXPECT_EQ(device.occupancy.grid.nx, grid.grid.nx);
       EXPECT_EQ(device.occupancy.grid.ny, grid.grid.ny);

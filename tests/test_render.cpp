@@ -733,6 +733,25 @@ TEST_P(Integrator, LocalStepsFollowAGradedMesh) {
   EXPECT_NE(a.samplesTotal, b.samplesTotal);
 }
 
+// Where steps follow the mesh, a partition whose transfer function reaches kRefinedStepOpacity takes half its
+// step: under a constant field (every partition at the largest adaptive step) an opacity just past it takes
+// twice the samples of one just below it, and both keep the exact transmittance.
+TEST_P(Integrator, OpaquePartitionsTakeHalfSteps) {
+  Mesh mesh = buildMesh(makeBoxGrid(CellType::Tetra, 8, kBox, [](Vec3f) { return 0.5f; }), "uniform");
+  Renderer renderer(mesh, mesh.findField("f"), 64);
+  RenderSettings local = settingsFor(RenderMode::Full, 0.02f, 0.08f);
+  local.integrator.followMesh = true;
+  local.integrator.terminationOpacity = 2.f; // no ray ends early: the sample counts compare whole rays
+  uint64_t samples[2];
+  for (int opaque = 0; opaque < 2; ++opaque) {
+    const float alphaPerUnit = opaque ? kRefinedStepOpacity + 0.05f : kRefinedStepOpacity - 0.05f;
+    renderer.setTransferFunction(TransferFunction(constantMap(alphaPerUnit), 0.f, 1.f));
+    expectExponentialTransmittance(renderer, local, alphaPerUnit, 0.08f, 1e-5f);
+    samples[opaque] = renderer.render(obliqueCamera(), local).samplesTotal;
+  }
+  EXPECT_NEAR(double(samples[1]) / double(samples[0]), 2.0, 0.1);
+}
+
 // The default step from the median volume per tetrahedron, within [1e-4 x diagonal, thinnest side / 4]: a
 // mesh of tiny cells cannot make rays of millions of samples, one of a few flat cells is sampled through (a
 // single pyramid 6 x 6 x 3 rendered black at the step of its volume, 3.3), and empty bounds give 0.

@@ -77,6 +77,14 @@ public:
   /// The most cells per partition, as given or by default.
   uint32_t leafSize() const;
 
+  /// Renders field `fieldIndex` of `mesh` from now on, keeping the acceleration data: `mesh` must hold the
+  /// same points and cells in the same order (a later step of a time series whose grid does not change, or
+  /// the same grid with other values, made the same way). Only the field's values are taken; the partitions'
+  /// value ranges and their metadata under the current transfer function are recomputed, in a pass over the
+  /// cells. The transfer function and its range are kept. Throws uvr::Error, changing nothing, when the
+  /// points or cells differ (a new renderer is needed then) or `mesh` has no field `fieldIndex`.
+  void setField(VolumeMesh mesh, int fieldIndex);
+
   /// Colours and opacities of `map` stretched over `range` of the field's values (ParaView's way); needed
   /// before the first frame. Recomputes the partitions' metadata only, on the GPU once CUDA is prepared;
   /// the same function and range again change nothing. Throws uvr::Error unless range.min < range.max, both

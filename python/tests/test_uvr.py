@@ -463,3 +463,21 @@ def test_default_opacity_unit_follows_the_domain_not_the_finest_cells():
     thin = renderer.render(size=(128, 128), camera={"view": "-y"}, unit=stats["s1"])
     spread = lambda img: img[:, :, :3].astype(float).mean(axis=2)[img[:, :, 3] > 0].std()
     assert spread(image) > 1.5 * spread(thin)
+
+
+def test_set_field_keeps_the_grid_and_renders_as_a_new_renderer():
+    """A later step on the same grid: set_field renders it as a renderer built for it; another grid is refused."""
+    points, cells, celltypes, point_data, _ = box_grid(4)
+    step = [uvr.Mesh(points, cells, celltypes, point_data={"p": point_data["wave"] * scale}) for scale in (1.0, 0.3)]
+    tf = uvr.TransferFunction("viridis", range=(-1.0, 2.0))
+    kept = uvr.Renderer(step[0], field="p")
+    first = kept.render(tf=tf, size=(48, 48))
+    kept.set_field(step[1], field="p")
+    second = kept.render(tf=tf, size=(48, 48))
+    np.testing.assert_array_equal(second, uvr.Renderer(step[1], field="p").render(tf=tf, size=(48, 48)))
+    assert not np.array_equal(first, second)
+    moved = points.copy()
+    moved[0, 0] += 0.01
+    with pytest.raises(uvr.Error, match="differ"):
+        kept.set_field(uvr.Mesh(moved, cells, celltypes, point_data={"p": point_data["wave"]}), field="p")
+    np.testing.assert_array_equal(kept.render(tf=tf, size=(48, 48)), second)

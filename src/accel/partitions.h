@@ -10,6 +10,7 @@
 
 #include <cstdint>
 #include <cstring>
+#include <span>
 #include <vector>
 
 namespace uvr {
@@ -72,6 +73,12 @@ using Partitions = PartitionArrays<HostStorage>;
 
 /// Median-split KD-tree over cell centroids until a leaf holds at most `leafSize` cells.
 Partitions buildPartitions(const MeshView &mesh, uint32_t leafSize);
+
+/// The scalar range of the cells each of the `count` partitions of the tree `nodes` lists, for `mesh`'s
+/// field: what buildPartitions computed, again for new values on the same cells (the tree, boxes and step
+/// scales depend on the cells alone).
+void computePartitionValueRanges(const MeshView &mesh, std::span<const KdNode> nodes, uint32_t count,
+                                 std::span<float> valueMin, std::span<float> valueMax);
 
 /// The default `leafSize` makes about this many partitions (the median splits make 1-2 times as many leaves),
 /// of at least kSmallestDefaultLeafSize cells (docs/design.md, "Choosing defaults"): a partition costs more

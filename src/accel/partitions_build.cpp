@@ -205,6 +205,37 @@ StepScales computeStepScales(const std::vector<int64_t> &sizeLog2Sums,
   return scales;
 }
 
+void computePartitionValueRanges(const MeshView &mesh, std::span<const KdNode> nodes, uint32_t count,
+                                 std::span<float> valueMin, std::span<float> valueMax) {
+  if (valueMin.size() != count || valueMax.size() != count)
+    throw Error("partition value ranges: wrong output size");
+  struct Range {
+    float lo = INFINITY, hi = -INFINITY;
+  };
+  tbb::enumerable_thread_specific<std::vector<Range>> perThread([&] { return std::vector<Range>(count); });
+  tbb::parallel_for(tbb::blocked_range<uint64_t>(0, mesh.cellCount()),
+                    [&](const tbb::blocked_range<uint64_t> &range) {
+                      std::vector<Range> &leaves = perThread.local();
+                      for (uint64_t c = range.begin(); c < range.end(); ++c) {
+                        float lo, hi;
+                        cellValueRange(mesh, c, lo, hi);
+                        forEachLeafTouching(nodes.data(), cellBounds(mesh, c), [&](uint32_t leaf) {
+                          leaves[leaf].lo = minf(leaves[leaf].lo, lo);
+                          leaves[leaf].hi = maxf(leaves[leaf].hi, hi);
+                        });
+                      }
+                    });
+  tbb::parallel_for(uint32_t(0), count, [&](uint32_t i) {
+    Range leaf;
+    for (const std::vector<Range> &local : perThread) {
+      leaf.lo = minf(leaf.lo, local[i].lo);
+      leaf.hi = maxf(leaf.hi, local[i].hi);
+    }
+    valueMin[i] = leaf.lo;
+    valueMax[i] = leaf.hi;
+  });
+}
+
 Partitions buildPartitions(const MeshView &mesh, uint32_t leafSize) {
   const uint64_t cellCount = mesh.cellCount();
   if (cellCount == 0)

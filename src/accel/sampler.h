@@ -20,15 +20,16 @@
 
 namespace uvr {
 
-/// The GPU's sampling: tets from their corners, other cells tested one at a time, no trail.
+/// The GPU's sampling: tets from their corners, walks across other cells where the volume has their
+/// adjacency, no trail.
 struct DeviceSampling {
   static constexpr bool kTetRecords = false; ///< read the per-tet records where the volume has them
-  static constexpr bool kCellWalks = false;  ///< walk across cells other than tets
-  static constexpr bool kTrail = false;      ///< follow a CellTrail from ray to ray
+  static constexpr bool kCellWalks = true; ///< walk across cells other than tets where it has their adjacency
+  static constexpr bool kTrail = false;    ///< follow a CellTrail from ray to ray
 };
 
-/// The host's sampling: all of the above. The GPU keeps no records (64 bytes per tet) and builds no
-/// adjacency for other cells; its neighbouring rays run at once, so there is no previous ray to learn from.
+/// The host's sampling: all of the above. The GPU keeps no records (64 bytes per tet); its neighbouring rays
+/// run at once, so there is no previous ray to learn from.
 struct HostSampling {
   static constexpr bool kTetRecords = true;
   static constexpr bool kCellWalks = true;

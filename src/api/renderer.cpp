@@ -9,9 +9,11 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <limits>
 #include <mutex>
 #include <optional>
+#include <span>
 #include <sstream>
 
 namespace uvr {
@@ -32,6 +34,21 @@ std::string numberText(double value) {
 /// What a frame may allocate per pixel, for the memory limit: the library's colour, opacity and sample
 /// buffers, and the copies the front ends make of them (RGBA, PNG rows, heat map).
 constexpr uint64_t kFrameBytesPerPixel = 32;
+
+template <typename T> bool sameArray(std::span<const T> a, std::span<const T> b) {
+  return a.size() == b.size() &&
+         (a.data() == b.data() || std::memcmp(a.data(), b.data(), a.size_bytes()) == 0);
+}
+
+/// Whether `a` and `b` hold the same points and cells, bit for bit, in the same order.
+bool sameGrid(const VolumeMesh &a, const VolumeMesh &b) {
+  if (!sameArray(a.points(), b.points()))
+    return false;
+  for (CellType type : {CellType::Tetra, CellType::Pyramid, CellType::Wedge, CellType::Hexahedron})
+    if (!sameArray(a.cells(type), b.cells(type)))
+      return false;
+  return true;
+}
 
 } // namespace
 
@@ -117,6 +134,20 @@ void VolumeRenderer::setTransferFunction(const ColorMap &map, ValueRange range) 
   impl_->tfPending = !anyBackend;
   impl_->map = map;
   impl_->range = range;
+}
+
+void VolumeRenderer::setField(VolumeMesh mesh, int fieldIndex) {
+  if (fieldIndex < 0 || fieldIndex >= mesh.fieldCount())
+    throw Error(mesh.source(), "", "no field " + std::to_string(fieldIndex) + " to render");
+  const std::lock_guard<std::mutex> lock(impl_->mutex);
+  if (!sameGrid(impl_->mesh, mesh))
+    throw Error(mesh.source(), "",
+                "its points or cells differ from those of the mesh rendered (" + impl_->mesh.source() +
+                    "): the acceleration data cannot be kept; render it with a new renderer");
+  // The renderer switches to the new mesh's arrays before the old handle, and its arrays, may go.
+  impl_->renderer.setField(detail::Access::mesh(mesh), fieldIndex);
+  impl_->mesh = std::move(mesh);
+  impl_->fieldIndex = fieldIndex;
 }
 
 void VolumeRenderer::prepare(Backend backend) {

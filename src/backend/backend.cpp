@@ -13,7 +13,7 @@ std::unique_ptr<RenderBackend> makeBackend(Backend backend, const Mesh &mesh, co
   if (backend == Backend::Cpu)
     return std::make_unique<CpuBackend>(mesh, view, leafSize);
 #ifdef UVR_HAVE_CUDA
-  return std::make_unique<CudaBackend>(view, mesh.points.size(), leafSize);
+  return std::make_unique<CudaBackend>(mesh, view, leafSize);
 #else
   throw Error("this build of uvr has no CUDA backend (no CUDA toolkit was found at build time)");
 #endif

@@ -29,6 +29,11 @@ public:
   /// Takes `tf` and recomputes the partitions' metadata; returns how many partitions it makes fully
   /// transparent.
   virtual uint32_t setTransferFunction(const TransferFunction &tf) = 0;
+  /// Takes the field of `view`, a view of the same points and cells as the backend's (new values, or another
+  /// field), keeping the acceleration data: the partitions' value ranges, and the metadata under the current
+  /// transfer function, are recomputed. Returns how many partitions are fully transparent (0 without a
+  /// transfer function).
+  virtual uint32_t setField(const MeshView &view) = 0;
   /// Draws a frame of `camera.width` x `camera.height` pixels into `target` (its host buffers) with the
   /// current transfer function; returns the samples taken. `kernelMs` is the GPU time of the frame's
   /// kernels, without copies; 0 on the CPU.

@@ -9,10 +9,18 @@
 
 namespace uvr {
 
-Renderer::Renderer(const Mesh &mesh, int fieldIndex, uint32_t leafSize) : mesh_(mesh), leafSize_(leafSize) {
+namespace {
+
+void checkFieldIndex(const Mesh &mesh, int fieldIndex) {
   if (fieldIndex < 0 || size_t(fieldIndex) >= mesh.fields.size())
     throw Error("the mesh has no scalar field to render");
-  meshView_ = makeMeshView(mesh_, fieldIndex);
+}
+
+} // namespace
+
+Renderer::Renderer(const Mesh &mesh, int fieldIndex, uint32_t leafSize) : mesh_(&mesh), leafSize_(leafSize) {
+  checkFieldIndex(mesh, fieldIndex);
+  meshView_ = makeMeshView(mesh, fieldIndex);
   const Box3f bounds = mesh.bounds();
   diagonal_ = bounds.lower.x <= bounds.upper.x ? length(bounds.upper - bounds.lower) : 0.f;
   center_ = bounds.lower.x <= bounds.upper.x ? bounds.center() : Vec3f{};
@@ -29,6 +37,15 @@ void Renderer::setTransferFunction(TransferFunction tf) {
   tfUpdateMs_ = timer.milliseconds();
 }
 
+void Renderer::setField(const Mesh &mesh, int fieldIndex) {
+  checkFieldIndex(mesh, fieldIndex);
+  mesh_ = &mesh;
+  meshView_ = makeMeshView(mesh, fieldIndex);
+  for (const std::unique_ptr<RenderBackend> &b : backends_)
+    if (b)
+      transparentPartitions_ = b->setField(meshView_);
+}
+
 const TransferFunction &Renderer::transferFunction() const {
   if (!tf_)
     throw Error("no transfer function set");
@@ -39,7 +56,7 @@ void Renderer::prepare(Backend which) {
   std::unique_ptr<RenderBackend> &b = backends_[size_t(which)];
   if (b)
     return;
-  b = makeBackend(which, mesh_, meshView_, leafSize());
+  b = makeBackend(which, *mesh_, meshView_, leafSize());
   if (tf_)
     transparentPartitions_ = b->setTransferFunction(*tf_);
 }
@@ -55,7 +72,7 @@ RenderBackend &Renderer::backend(Backend which) const {
 const CpuBackend &Renderer::cpu() const { return static_cast<const CpuBackend &>(backend(Backend::Cpu)); }
 
 uint32_t Renderer::leafSize() const {
-  return leafSize_ != kAutoLeafSize ? leafSize_ : defaultLeafSize(mesh_.cellCount());
+  return leafSize_ != kAutoLeafSize ? leafSize_ : defaultLeafSize(mesh_->cellCount());
 }
 
 uint32_t Renderer::partitionCount(Backend which) const { return backend(which).partitionCount(); }
@@ -98,8 +115,8 @@ void Renderer::render(const Camera &camera, const RenderSettings &settings, Fram
     throw Error(what.str());
   }
   // A ray's samples lie at t = t_enter + k * spacing in float: from an eye so far that the spacing is below
-  // t's precision they would not advance. Spacings go down to s1 / 8 where steps follow the mesh.
-  const float finest = s.followMesh ? s.s1 / 8.f : s.s1;
+  // t's precision they would not advance. Spacings go down to s1 / 16 where steps follow the mesh.
+  const float finest = s.followMesh ? s.s1 / 16.f : s.s1;
   const float reach = length(camera.eye - center_) + diagonal_;
   if (!(reach / finest < float(1 << 23))) {
     std::ostringstream what;

@@ -42,7 +42,7 @@ struct Frame {
 };
 
 /// The most steps of s1 a ray may take along the mesh bounds' diagonal: far fewer are ever of use, and with
-/// steps that follow the mesh (down to s1 / 8) the march's float grid indices stay exact (SampleGrid).
+/// steps that follow the mesh (down to s1 / 16) the march's float grid indices stay exact (SampleGrid).
 constexpr float kMostSamplesPerRay = float(1 << 20);
 
 class Renderer {
@@ -55,6 +55,11 @@ public:
   /// Replaces the transfer function and recomputes the partitions' metadata on every backend prepared; a
   /// backend prepared later takes it then. The mesh is not touched.
   void setTransferFunction(TransferFunction tf);
+
+  /// Renders field `fieldIndex` of `mesh` from now on: a mesh with the same points and cells as the one
+  /// rendered so far (the caller checks), which must outlive the renderer in its place. Every backend
+  /// prepared keeps its acceleration data and recomputes the partitions' value ranges and metadata.
+  void setField(const Mesh &mesh, int fieldIndex);
 
   /// Makes `backend` unless it exists: builds the acceleration data there (on the GPU for CUDA, after the
   /// mesh's upload) and hands it the transfer function if one is set. Frame times then exclude it, and
@@ -99,7 +104,7 @@ private:
   RenderBackend &backend(Backend backend) const; ///< throws where not prepared
   const class CpuBackend &cpu() const;
 
-  const Mesh &mesh_;
+  const Mesh *mesh_;
   MeshView meshView_;
   float diagonal_ = 0.f; ///< of the mesh bounds
   Vec3f center_;         ///< of the mesh bounds

@@ -57,10 +57,16 @@ inline float finestStepSigma(float s1, float s2, float p) {
   return s2 > s1 ? 1.f - powf(0.5f * s1 / (s2 - s1), 1.f / p) : -INFINITY;
 }
 
-/// The spacing of a ray's sample grid: s1, or where steps follow the mesh, s1 at the finest step scale.
+/// Where steps follow the mesh, a partition where the transfer function reaches this opacity (per unit
+/// distance) takes half its step: there a step's samples decide where a ray stops, and few rays go on past
+/// it, so the finer steps cost little beside what they fix. Translucent functions never reach it.
+constexpr float kRefinedStepOpacity = 0.5f;
+
+/// The spacing of a ray's sample grid: s1, or where steps follow the mesh, half of s1 at the finest step
+/// scale (the refined steps of opaque partitions).
 UVR_HOST_DEVICE inline float gridSpacing(const IntegratorSettings &settings,
                                          const PartitionsView &partitions) {
-  return settings.followMesh ? settings.s1 * partitions.finestStepScale : settings.s1;
+  return settings.followMesh ? 0.5f * settings.s1 * partitions.finestStepScale : settings.s1;
 }
 
 /// The points a ray's samples lie on, t = origin + k * spacing, from where the ray enters the mesh bounds,
@@ -139,11 +145,14 @@ public:
   /// The step through KD node `node`, a leaf or a subtree marched whole: the partition's adaptive step (paper
   /// §2.4), or s1 where that rounds to it or nothing is sampled adaptively.
   UVR_HOST_DEVICE float step(uint32_t node) const {
-    // A whole node's partitions all take the finest step: one grid spacing.
+    // A whole node's partitions all take the finest step: s1 at the finest scale.
     const KdNode &n = scene_.partitions.nodes[node];
     if (n.axis != KdNode::kLeaf)
-      return grid_.spacing;
-    const float scale = settings_.followMesh ? scene_.partitions.stepScale[n.child] : 1.f;
+      return settings_.followMesh ? 2.f * grid_.spacing : grid_.spacing;
+    const float scale = !settings_.followMesh ? 1.f
+                        : scene_.nodeMaxOpacity[node] >= kRefinedStepOpacity
+                            ? 0.5f * scene_.partitions.stepScale[n.child]
+                            : scene_.partitions.stepScale[n.child];
     const float sigma = scene_.sigma[n.child];
     return scale * (takesFinestStep(sigma)
                         ? settings_.s1
@@ -170,7 +179,8 @@ private:
     const float sigma = scene_.nodeMinSigma[node];
     return sigma != kTransparentSigma && takesFinestStep(sigma) &&
            (!settings_.followMesh ||
-            scene_.partitions.nodeMaxStepScale[node] <= scene_.partitions.finestStepScale);
+            (scene_.partitions.nodeMaxStepScale[node] <= scene_.partitions.finestStepScale &&
+             scene_.nodeMaxOpacity[node] < kRefinedStepOpacity));
   }
 
   const SceneView &scene_;

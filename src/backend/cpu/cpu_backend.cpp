@@ -26,6 +26,18 @@ uint32_t CpuBackend::setTransferFunction(const TransferFunction &tf) {
   return metadata_.transparentCount;
 }
 
+uint32_t CpuBackend::setField(const MeshView &view) {
+  mesh_ = view;
+  Partitions &parts = accel_.partitions;
+  computePartitionValueRanges(view, parts.nodes, parts.count(), parts.valueMin, parts.valueMax);
+  if (!accel_.tetAffine.empty()) // the records hold the field
+    accel_.tetAffine = buildTetAffine(view);
+  if (!tf_)
+    return 0;
+  metadata_ = computePartitionMetadata(parts, *tf_);
+  return metadata_.transparentCount;
+}
+
 SceneView CpuBackend::sceneView() const {
   if (!tf_)
     throw Error("no transfer function set");

@@ -13,6 +13,7 @@ public:
   CpuBackend(const Mesh &mesh, const MeshView &view, uint32_t leafSize);
 
   uint32_t setTransferFunction(const TransferFunction &tf) override;
+  uint32_t setField(const MeshView &view) override;
   SampleTotals render(const CameraView &camera, const IntegratorSettings &settings, const PixelTarget &target,
                       double &kernelMs) override;
   uint32_t partitionCount() const override { return accel_.partitions.count(); }

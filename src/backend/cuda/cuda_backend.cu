@@ -4,6 +4,7 @@
 #include "backend/cuda/cuda_build.cuh"
 #include "backend/cuda/device_buffer.cuh"
 #include "backend/cuda/partition_metadata.cuh"
+#include "mesh/cell_neighbors.h"
 #include "render/scene.h"
 #include <uvr/error.h>
 #include <uvr/system.h>
@@ -15,6 +16,7 @@
 
 #include <algorithm>
 #include <cstring>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -111,10 +113,12 @@ struct CudaBackend::Impl {
   DeviceBuffer<Vec3f> points;
   DeviceBuffer<uint32_t> tets, pyramids, wedges, hexes;
   DeviceBuffer<float> values;
+  uint64_t pointCount = 0;
   DeviceAcceleration accel;
   double buildMs = 0.0;
   std::vector<std::pair<std::string, double>> buildSteps;
   DeviceMetadata metadata;
+  std::optional<TransferFunctionRangeView> tf; // the function's tables on the device, once set
   DeviceBuffer<double> tfPrefixSum, tfPrefixSquares;
   DeviceBuffer<float> tfOpacityMax;
   DeviceBuffer<Vec4f> tfTable, tfExtinction, tfExtinctionIntegral;
@@ -147,8 +151,9 @@ struct CudaBackend::Impl {
   }
 };
 
-CudaBackend::CudaBackend(const MeshView &mesh, uint64_t pointCount, uint32_t leafSize)
+CudaBackend::CudaBackend(const Mesh &hostMesh, const MeshView &mesh, uint32_t leafSize)
     : impl_(std::make_unique<Impl>()) {
+  const uint64_t pointCount = hostMesh.points.size();
   int devices = 0;
   const cudaError_t status = cudaGetDeviceCount(&devices);
   if (status != cudaSuccess || devices == 0)
@@ -162,6 +167,7 @@ CudaBackend::CudaBackend(const MeshView &mesh, uint64_t pointCount, uint32_t lea
   UVR_CUDA_CHECK(cudaEventCreate(&d.kernelStart));
   UVR_CUDA_CHECK(cudaEventCreate(&d.kernelEnd));
   UVR_CUDA_CHECK(cudaEventCreate(&d.renderStart));
+  d.pointCount = pointCount;
   MeshView onDevice = mesh;
   onDevice.points = d.points.upload(mesh.points, pointCount);
   onDevice.tets = d.tets.upload(mesh.tets, 4 * mesh.tetCount);
@@ -173,6 +179,15 @@ CudaBackend::CudaBackend(const MeshView &mesh, uint64_t pointCount, uint32_t lea
 
   const Timer timer;
   d.buildSteps = buildOnDevice(onDevice, pointCount, leafSize, d.accel);
+  const uint64_t otherCells = mesh.cellCount() - mesh.tetCount;
+  size_t freeBytes = 0, totalBytes = 0;
+  UVR_CUDA_CHECK(cudaMemGetInfo(&freeBytes, &totalBytes));
+  if (otherCells > 0 && cellAdjacencyBytes(otherCells) <= freeBytes / 8) {
+    const Timer adjacency;
+    copyMember(d.accel.cellNeighbors, buildCellNeighbors(hostMesh));
+    copyMember(d.accel.cellFacePlanes, buildCellFacePlanes(mesh));
+    d.buildSteps.emplace_back("cell adjacency (host)", adjacency.milliseconds());
+  }
   d.buildMs = timer.milliseconds();
   SceneView &scene = d.scene;
   scene = makeSceneView(onDevice, d.accel);
@@ -193,10 +208,33 @@ uint32_t CudaBackend::setTransferFunction(const TransferFunction &tf) {
   ranges.prefixSquares = d.tfPrefixSquares.upload(tf.prefixSquares().data(), tf.prefixSquares().size());
   ranges.opacityMax = d.tfOpacityMax.upload(tf.opacityMaxima().data(), tf.opacityMaxima().size());
   d.scene.tf = ranges.function;
+  d.tf = ranges;
   d.skippingFrames = 0;
   d.tiles = false;
 
   return d.metadata.update(ranges, d.scene.partitions);
+}
+
+uint32_t CudaBackend::setField(const MeshView &view) {
+  Impl &d = *impl_;
+  MeshView &onDevice = d.scene.mesh;
+  onDevice.values = view.values
+                        ? d.values.upload(view.values, view.cellCentered ? view.cellCount() : d.pointCount)
+                        : nullptr;
+  onDevice.cellCentered = view.cellCentered;
+  // The ranges from the host's copy of the mesh: the tree is small to fetch, and one pass over the cells on
+  // all cores costs little beside a rebuild.
+  PartitionArrays<DeviceStorage> &parts = d.accel.partitions;
+  std::vector<KdNode> nodes(parts.nodes.size());
+  parts.nodes.download(nodes.data(), nodes.size());
+  const uint32_t count = d.scene.partitions.count;
+  std::vector<float> valueMin(count), valueMax(count);
+  computePartitionValueRanges(view, nodes, count, valueMin, valueMax);
+  parts.valueMin.upload(valueMin.data(), count);
+  parts.valueMax.upload(valueMax.data(), count);
+  d.skippingFrames = 0;
+  d.tiles = false;
+  return d.tf ? d.metadata.update(*d.tf, d.scene.partitions) : 0;
 }
 
 PartitionMetadata CudaBackend::metadata() const {

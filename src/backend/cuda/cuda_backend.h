@@ -16,10 +16,11 @@ namespace uvr {
 
 class CudaBackend final : public RenderBackend {
 public:
-  /// Uploads `mesh` (host pointers, `pointCount` points) to the current GPU and builds the acceleration data
-  /// there, with partitions of at most `leafSize` cells; throws uvr::Error when there is no GPU or memory
-  /// runs out.
-  CudaBackend(const MeshView &mesh, uint64_t pointCount, uint32_t leafSize);
+  /// Uploads `view` of `mesh` to the current GPU and builds the acceleration data there, with partitions of
+  /// at most `leafSize` cells; throws uvr::Error when there is no GPU or memory runs out. The adjacency of
+  /// the cells other than tets, for walks between samples, is built on the host and uploaded where it takes
+  /// no more than an eighth of the GPU memory left.
+  CudaBackend(const Mesh &mesh, const MeshView &view, uint32_t leafSize);
   ~CudaBackend() override;
   CudaBackend(const CudaBackend &) = delete;
   CudaBackend &operator=(const CudaBackend &) = delete;
@@ -27,6 +28,9 @@ public:
   /// Uploads `tf` and recomputes the partitions' metadata on the GPU, as computePartitionMetadata does on the
   /// host; returns the number of fully transparent partitions.
   uint32_t setTransferFunction(const TransferFunction &tf) override;
+  /// Uploads the field of `view` (host pointers, same points and cells) and its partitions' value ranges,
+  /// computed on the host, and recomputes the metadata on the GPU.
+  uint32_t setField(const MeshView &view) override;
   /// Copies the metadata of the last setTransferFunction back, for checks against the host's.
   PartitionMetadata metadata() const override;
   /// Copies the acceleration data the GPU built back, for checks against the host's builds.
