@@ -110,8 +110,9 @@ PYBIND11_MODULE(vtk, m) {
       "stats",
       [](const py::object &mapper) {
         vtkUvrVolumeMapper *m = unwrap(mapper);
-        return py::dict("builds"_a = m->GetBuildCount(), "build_ms"_a = m->GetLastBuildMs(),
-                        "render_ms"_a = m->GetLastRenderMs(), "backend"_a = m->GetLastBackend());
+        return py::dict("builds"_a = m->GetBuildCount(), "field_updates"_a = m->GetFieldUpdateCount(),
+                        "build_ms"_a = m->GetLastBuildMs(), "render_ms"_a = m->GetLastRenderMs(),
+                        "backend"_a = m->GetLastBackend());
       },
       "mapper"_a,
       "The last frame of a mapper made by VolumeMapper(): builds (how often the acceleration data was "

@@ -106,7 +106,7 @@ struct vtkUvrVolumeMapper::Internals {
   vtkMTimeType transferTime = 0;
   std::optional<uvr::VolumeRenderer> renderer;
   bool haveTransfer = false;
-  int builds = 0;
+  int builds = 0, fieldUpdates = 0;
   double buildMs = 0.0, renderMs = 0.0;
   uvr::Backend backend = uvr::Backend::Cpu;
   bool cudaFailed = false;
@@ -137,6 +137,7 @@ vtkUvrVolumeMapper::~vtkUvrVolumeMapper() = default;
 double vtkUvrVolumeMapper::GetLastBuildMs() const { return this->Internal->buildMs; }
 double vtkUvrVolumeMapper::GetLastRenderMs() const { return this->Internal->renderMs; }
 int vtkUvrVolumeMapper::GetBuildCount() const { return this->Internal->builds; }
+int vtkUvrVolumeMapper::GetFieldUpdateCount() const { return this->Internal->fieldUpdates; }
 const char *vtkUvrVolumeMapper::GetLastBackend() const { return uvr::backendName(this->Internal->backend); }
 
 void vtkUvrVolumeMapper::ReleaseGraphicsResources(vtkWindow *window) {
@@ -177,7 +178,8 @@ void vtkUvrVolumeMapper::Render(vtkRenderer *ren, vtkVolume *vol) {
     const MeshKey meshKey{ArrayKey(grid->GetPoints()), ArrayKey(cells->GetOffsetsArray()),
                           ArrayKey(cells->GetConnectivityArray()), ArrayKey(types)};
     const FieldKey fieldKey{ArrayKey(scalars), centering};
-    if (!in.renderer || !(meshKey == in.meshKey) || !(fieldKey == in.fieldKey)) {
+    const bool newMesh = !in.renderer || !(meshKey == in.meshKey);
+    if (newMesh || !(fieldKey == in.fieldKey)) {
       std::vector<float> pointCopy, fieldCopy;
       std::vector<int64_t> offsetCopy, connectivityCopy;
       uvr::MeshArrays arrays;
@@ -188,12 +190,26 @@ void vtkUvrVolumeMapper::Render(vtkRenderer *ren, vtkVolume *vol) {
       const std::string name = scalars->GetName() ? scalars->GetName() : "scalars";
       arrays.fields.push_back({name, centering == 1 ? uvr::Centering::Cell : uvr::Centering::Point,
                                viewArray(scalars, fieldCopy)});
-      in.renderer.reset();
-      in.renderer.emplace(uvr::VolumeMesh::fromArrays(arrays, "the vtkUnstructuredGrid"), 0);
+      uvr::VolumeMesh mesh = uvr::VolumeMesh::fromArrays(arrays, "the vtkUnstructuredGrid");
+      bool kept = false;
+      if (!newMesh) {
+        // New scalars on the same grid: the acceleration data stays, the transfer function too.
+        try {
+          in.renderer->setField(mesh, 0);
+          kept = true;
+          ++in.fieldUpdates;
+        } catch (const uvr::Error &) {
+          // the cells' order came out otherwise: built afresh below
+        }
+      }
+      if (!kept) {
+        in.renderer.reset();
+        in.renderer.emplace(std::move(mesh), 0);
+        in.haveTransfer = false;
+        ++in.builds;
+      }
       in.meshKey = meshKey;
       in.fieldKey = fieldKey;
-      in.haveTransfer = false;
-      ++in.builds;
     }
 
     // The transfer function: the property's functions sampled over the union of their ranges.

@@ -14,7 +14,8 @@
 //   it shows, so that surfaces hide the volume behind them; the volume image is then blended over the
 //   framebuffer, premultiplied, so that it hides what lies behind it as its opacity says.
 // - The acceleration data (uvr::VolumeRenderer) is kept across camera and transfer-function changes and
-//   rebuilt only when the grid's points, cells or scalars change (by their modification times).
+//   rebuilt only when the grid's points or cells change (by their modification times); new scalars on the
+//   same grid (a time step) replace the field's values only (VolumeRenderer::setField).
 // - Backend: CUDA where the library was built with it and a GPU is found (unless UseCuda is off), else the
 //   CPU on all cores.
 #pragma once
@@ -52,8 +53,11 @@ public:
   /// What the last frame cost: the acceleration build (when it was built) and the frame itself, in ms.
   double GetLastBuildMs() const;
   double GetLastRenderMs() const;
-  /// How often the acceleration data was built: once per mesh, again only when the grid changes.
+  /// How often the acceleration data was built: once per mesh, again only when the grid's points or cells
+  /// change.
   int GetBuildCount() const;
+  /// How often new scalars on the same grid were taken while keeping the acceleration data.
+  int GetFieldUpdateCount() const;
   /// The backend of the last frame: "cpu" or "cuda".
   const char *GetLastBackend() const;
 
