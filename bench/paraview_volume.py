@@ -4,9 +4,11 @@ of unstructured grids (its default mapper, projected tetrahedra, and "Resample T
 (`uvr render --mode reference --s1 <default s1 / 8>`) of the same view and function. Results in
 docs/results/cpu.md.
 
-Usage: pvbatch bench/paraview_volume.py UVR_BINARY PLUGIN MESH FIELD SIZE FRAMES OUT_DIR
+Usage: pvbatch bench/paraview_volume.py UVR_BINARY PLUGIN MESH FIELD SIZE FRAMES OUT_DIR [PRESETS NAME]
   FIELD: a point field; vectors are taken as their magnitude. FRAMES: frames timed after the first, each
-  turning the camera by a degree. Prints one JSON line per representation.
+  turning the camera by a degree. PRESETS, NAME: a ParaView preset file and the preset to take (its colour
+  and opacity points stretched over the field's range, in its colour space); default: a translucent ramp.
+  Prints one JSON line per representation.
 """
 import json
 import math
@@ -17,13 +19,29 @@ import time
 
 from paraview import simple
 
+# The default function: colour (x, r, g, b) and opacity (x, opacity, midpoint, sharpness) over [0, 1].
 RGB = [(0.0, 0.23, 0.30, 0.75), (0.5, 0.87, 0.87, 0.87), (1.0, 0.71, 0.02, 0.15)]
-OPACITY = [(0.0, 0.0), (0.3, 0.05), (1.0, 0.9)]
+OPACITY = [(0.0, 0.0, 0.5, 0.0), (0.3, 0.05, 0.5, 0.0), (1.0, 0.9, 0.5, 0.0)]
+
+
+def read_preset(path, name):
+    """A preset's points over [0, 1] of its own colour range, and its colour space."""
+    with open(path) as f:
+        presets = json.load(f)
+    preset = next(p for p in (presets if isinstance(presets, list) else [presets]) if p.get("Name") == name)
+    rgb = [tuple(preset["RGBPoints"][i:i + 4]) for i in range(0, len(preset["RGBPoints"]), 4)]
+    x0, x1 = rgb[0][0], rgb[-1][0]
+    scale = lambda x: (x - x0) / (x1 - x0)  # noqa: E731
+    opacity = [tuple(preset["Points"][i:i + 4]) for i in range(0, len(preset.get("Points", [])), 4)]
+    return ([(scale(x), r, g, b) for x, r, g, b in rgb], [(scale(x), a, m, s) for x, a, m, s in opacity],
+            preset.get("ColorSpace", "RGB"))
 
 
 def main():
     uvr, plugin, mesh, field, size, frames, out = sys.argv[1:8]
     size, frames = int(size), int(frames)
+    rgb_points, opacity_points, color_space = (read_preset(*sys.argv[8:10]) if len(sys.argv) > 9 else
+                                               (RGB, OPACITY, "RGB"))
     os.makedirs(out, exist_ok=True)
     simple.LoadPlugin(plugin, remote=False, ns=globals())
     reader = simple.XMLUnstructuredGridReader(FileName=[mesh])
@@ -40,9 +58,9 @@ def main():
     name = os.path.splitext(os.path.basename(mesh))[0]
     tf = os.path.join(out, "tf.json")
     with open(tf, "w") as f:
-        json.dump([{"Name": "bench", "ColorSpace": "RGB",
-                    "RGBPoints": [v for x, r, g, b in RGB for v in (lo + x * (hi - lo), r, g, b)],
-                    "Points": [v for x, a in OPACITY for v in (lo + x * (hi - lo), a, 0.5, 0.0)]}], f)
+        json.dump([{"Name": "bench", "ColorSpace": color_space,
+                    "RGBPoints": [v for x, r, g, b in rgb_points for v in (lo + x * (hi - lo), r, g, b)],
+                    "Points": [v for x, a, m, s in opacity_points for v in (lo + x * (hi - lo), a, m, s)]}], f)
 
     camera_args = None
     results = []
@@ -65,10 +83,10 @@ def main():
         lut.AutomaticRescaleRangeMode = "Never"
         if array.GetNumberOfComponents() > 1:
             lut.VectorMode = "Magnitude"
-        lut.ColorSpace = "RGB"
-        lut.RGBPoints = [v for x, r, g, b in RGB for v in (lo + x * (hi - lo), r, g, b)]
+        lut.ColorSpace = color_space
+        lut.RGBPoints = [v for x, r, g, b in rgb_points for v in (lo + x * (hi - lo), r, g, b)]
         opacity = simple.GetOpacityTransferFunction(field)
-        opacity.Points = [v for x, a in OPACITY for v in (lo + x * (hi - lo), a, 0.5, 0.0)]
+        opacity.Points = [v for x, a, m, s in opacity_points for v in (lo + x * (hi - lo), a, m, s)]
         display.ScalarOpacityUnitDistance = unit
         view.ResetCamera()
         camera = view.GetActiveCamera()
