@@ -180,6 +180,59 @@ TEST_P(Integrator, AdaptiveStepsKeepTheTransmittance) {
     expectExponentialTransmittance(renderer, settingsFor(mode, s1, s2), alphaPerUnit, s2, 1e-4f);
 }
 
+// Steps much longer than a hole in the mesh (hexahedra: no boundary crossings tell the march where the gaps
+// are): where a sample lands in the hole, the march goes on a spacing at a time to the step's next sample, so
+// the cells just past the hole are not lost with it. Each pixel's transmittance stays within one long step of
+// the fixed-step marcher's, and every long-step frame is as opaque overall as that one.
+TEST_P(Integrator, LongStepsPastAHoleKeepTheCellsBehindIt) {
+  UnstructuredGrid grid = makeBoxGrid(CellType::Hexahedron, 16, kBox, radial);
+  UnstructuredGrid holed = grid;
+  holed.offsets = {0};
+  holed.connectivity.clear();
+  holed.types.clear();
+  for (size_t c = 0; c + 1 < grid.offsets.size(); ++c) {
+    Vec3f centre{0.f, 0.f, 0.f};
+    for (int64_t i = grid.offsets[c]; i < grid.offsets[c + 1]; ++i)
+      centre = centre + grid.points[size_t(grid.connectivity[size_t(i)])] * 0.125f;
+    if (std::fabs(centre.x) < 0.1f && std::fabs(centre.y) < 0.6f) // a slot two cells wide
+      continue;
+    holed.connectivity.insert(holed.connectivity.end(), grid.connectivity.begin() + grid.offsets[c],
+                              grid.connectivity.begin() + grid.offsets[c + 1]);
+    holed.offsets.push_back(int64_t(holed.connectivity.size()));
+    holed.types.push_back(grid.types[c]);
+  }
+  holed.fields.resize(1); // the point field; the cell field's values would no longer match the cells
+  const Mesh mesh = buildMesh(std::move(holed), "slotted box");
+  Renderer renderer(mesh, mesh.findField("f"), 32);
+  // Opacity constant, colour varying near the centre only: the other partitions take the long step.
+  const float alphaPerUnit = 0.3f;
+  ColorMap map = constantMap(alphaPerUnit);
+  map.rgbPoints = {0.f, 1.f, 1.f, 1.f, 0.9f, 1.f, 1.f, 1.f, 1.f, 1.f, 0.f, 0.f};
+  renderer.setTransferFunction(TransferFunction(map, 0.f, 1.f));
+  const float s1 = 0.01f, s2 = 0.32f; // a long step spans the slot (0.25) and more
+  RenderSettings fixed = settingsFor(RenderMode::Reference, s1);
+  fixed.integrator.terminationOpacity = 2.f;
+  const Frame reference = renderer.render(obliqueCamera(), fixed);
+  const float kappa = -std::log(1.f - alphaPerUnit) / fixed.integrator.unit;
+  for (RenderMode mode : {RenderMode::Adaptive, RenderMode::Full}) {
+    RenderSettings settings = settingsFor(mode, s1, s2);
+    settings.integrator.terminationOpacity = 2.f;
+    const Frame frame = renderer.render(obliqueCamera(), settings);
+    double sum = 0.0, referenceSum = 0.0;
+    for (size_t i = 0; i < frame.opacity.size(); ++i) {
+      const float a = 1.f - frame.opacity[i], b = 1.f - reference.opacity[i];
+      // Off by at most a long step's worth of absorption either way (a sample standing for a step that
+      // leaves the mesh, or the last grid points before the ray comes back in).
+      EXPECT_LE(std::fabs(std::log(std::max(a, 1e-6f)) - std::log(std::max(b, 1e-6f))), kappa * s2 + 1e-3f)
+          << modeName(mode) << " pixel " << i;
+      sum += frame.opacity[i];
+      referenceSum += reference.opacity[i];
+    }
+    EXPECT_NEAR(sum / referenceSum, 1.0, 0.01) << modeName(mode);
+    EXPECT_LT(frame.samplesTotal, reference.samplesTotal / 4) << modeName(mode); // the steps are long
+  }
+}
+
 // Adaptive steps are whole numbers of s1. Colour varies only near the centre, so that the other partitions
 // all take s2; two values of s2 that round to the same number of fixed steps then render the same frame with
 // the same samples, about a third of reference's, and one that rounds to two steps takes about half.

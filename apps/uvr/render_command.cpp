@@ -1,4 +1,5 @@
 #include "commands.h"
+#include "movie.h"
 #include "render_options.h"
 
 #include "front_end.h"
@@ -25,7 +26,9 @@ namespace {
 
 struct RenderCommandOptions {
   RenderOptions view;
+  MovieOptions movie;
   int frames = 1;
+  bool framesGiven = false;
   std::string output;
   std::string heatmap;
   std::string stats;
@@ -67,18 +70,16 @@ void runRender(const RenderCommandOptions &o) {
     throw Error("--frames must be at least 1");
   checkOutputs(o);
   const ColorMap colorMap = chooseTransferFunction(o.view);
+  if (isMovie(o.view, o.movie)) {
+    renderMovie(o.view, o.movie, settings, colorMap,
+                {o.output, o.heatmap, o.stats, o.framesGiven ? std::optional<int>(o.frames) : std::nullopt});
+    return;
+  }
 
   const LoadedMesh loaded = loadForRendering(o.view);
   const VolumeMesh &mesh = loaded.mesh;
 
-  // The default step takes at most 10^4 along the diagonal; a step given that takes more makes slow frames.
-  const Box3f bounds = mesh.bounds();
-  const float diagonal = length(bounds.upper - bounds.lower);
-  if (settings.s1 > 0.f && diagonal / settings.s1 > 1e4f)
-    std::fprintf(
-        stderr,
-        "uvr: warning: --s1 %g takes %.0f samples along the mesh's diagonal (the default at most 10000)\n",
-        double(settings.s1), double(diagonal / settings.s1));
+  warnOfSmallStep(settings, mesh);
 
   VolumeRenderer renderer(mesh, loaded.fieldIndex, o.view.leafSize);
   // The acceleration data is built first, outside the frame times (for CUDA on the GPU, so that the transfer
@@ -136,14 +137,19 @@ void addRenderCommand(CLI::App &app) {
   auto options = std::make_shared<RenderCommandOptions>();
   RenderCommandOptions &o = *options;
   CLI::App *cmd = app.add_subcommand("render", "Render a mesh to a PNG");
-  addRenderOptions(cmd, o.view);
-  cmd->add_option("--frames", o.frames, "Render this many frames; render_ms is their median")
+  addRenderOptions(cmd, o.view, /*timeRanges=*/true);
+  addMovieOptions(cmd, o.movie);
+  cmd->add_option("--frames", o.frames,
+                  "Render this many frames; render_ms is their median (of a movie: its frame count)")
       ->check(integerAtLeast(1))
       ->capture_default_str();
   cmd->add_option("-o,--output", o.output, "Output PNG (.png)")->required();
   cmd->add_option("--heatmap", o.heatmap, "Write samples per pixel as a colour-coded PNG");
   cmd->add_option("--stats", o.stats, "Write statistics as JSON");
-  cmd->callback([options] { runRender(*options); });
+  cmd->callback([options, cmd] {
+    options->framesGiven = cmd->count("--frames") > 0;
+    runRender(*options);
+  });
 }
 
 } // namespace uvr

@@ -1,6 +1,7 @@
 #include "render_options.h"
 
 #include "front_end.h"
+#include "movie.h"
 #include "option_checks.h"
 
 #include <uvr/color_map.h>
@@ -50,14 +51,36 @@ std::string viewNames() {
   return names;
 }
 
-void addRenderOptions(CLI::App *cmd, RenderOptions &o) {
+void addRenderOptions(CLI::App *cmd, RenderOptions &o, bool timeRanges) {
   cmd->add_option("MESH", o.mesh,
                   "Mesh file (.vtu, .vtk, .msh, .e, .ex2, .exo, .g, .umesh; a .pvd series or numbered files "
                   "such as data_%d.vtu)")
       ->required();
-  cmd->add_option("--time-step", o.timeStep, "Time step of a file that has several, from 0")
-      ->check(integerAtLeast(0))
-      ->capture_default_str();
+  if (timeRanges)
+    cmd->add_option(
+           "--time-step", o.timeSteps,
+           "Time step of a file that has several, from 0; A:B[:STEP] (B included) or all: a movie of "
+           "those steps")
+        ->check(CLI::Validator(
+            [](std::string &text) -> std::string {
+              try {
+                parseTimeSteps(text);
+              } catch (const Error &e) {
+                return e.what();
+              }
+              return {};
+            },
+            "N|A:B[:STEP]|all"))
+        ->each([&o](const std::string &text) {
+          const TimeSteps steps = parseTimeSteps(text);
+          if (!steps.range)
+            o.timeStep = steps.first;
+        })
+        ->default_str("0");
+  else
+    cmd->add_option("--time-step", o.timeStep, "Time step of a file that has several, from 0")
+        ->check(integerAtLeast(0))
+        ->capture_default_str();
   cmd->add_option("--field", o.field, "Scalar field to render (default: the first)");
   cmd->add_option("--tf", o.tf,
                   "Transfer function: a ParaView preset JSON file or a built-in name: " + builtinNames());
@@ -105,11 +128,13 @@ void addRenderOptions(CLI::App *cmd, RenderOptions &o) {
   cmd->add_option("--backend", o.backend, "cpu or cuda")->capture_default_str();
 }
 
-LoadedMesh loadForRendering(const RenderOptions &o) {
+LoadedMesh loadForRendering(const RenderOptions &o) { return loadForRendering(o, o.timeStep); }
+
+LoadedMesh loadForRendering(const RenderOptions &o, int timeStep) {
   LoadedMesh loaded;
   const Timer loadTimer;
   LoadOptions options;
-  options.timeStep = o.timeStep;
+  options.timeStep = timeStep;
   loaded.mesh = VolumeMesh::load(o.mesh, options);
   loaded.loadMs = loadTimer.milliseconds();
   const uint64_t skipped = loaded.mesh.cellCounts().skipped;
@@ -122,6 +147,17 @@ LoadedMesh loadForRendering(const RenderOptions &o) {
     throw Error(std::string(e.what()) + (o.field.empty() ? "" : " (--field)"));
   }
   return loaded;
+}
+
+void warnOfSmallStep(const FrameSettings &settings, const VolumeMesh &mesh) {
+  // The default step takes at most 10^4 along the diagonal; a step given that takes more makes slow frames.
+  const Box3f bounds = mesh.bounds();
+  const float diagonal = length(bounds.upper - bounds.lower);
+  if (settings.s1 > 0.f && diagonal / settings.s1 > 1e4f)
+    std::fprintf(
+        stderr,
+        "uvr: warning: --s1 %g takes %.0f samples along the mesh's diagonal (the default at most 10000)\n",
+        double(settings.s1), double(diagonal / settings.s1));
 }
 
 FrameSettings parseFrameSettings(const RenderOptions &o) {

@@ -15,7 +15,8 @@ namespace uvr {
 
 struct RenderOptions {
   std::string mesh;
-  int timeStep = 0;
+  int timeStep = 0;      ///< the step --time-step names when it names one
+  std::string timeSteps; ///< --time-step as given (`uvr render`: also a range, see parseTimeSteps); empty: 0
   std::string field;
   std::string tf;
   std::string tfName;
@@ -33,8 +34,9 @@ struct RenderOptions {
   std::string backend = "cpu";
 };
 
-/// Registers MESH and the options that describe a view (field, transfer function, sampling, camera, size).
-void addRenderOptions(CLI::App *command, RenderOptions &options);
+/// Registers MESH and the options that describe a view (field, transfer function, sampling, camera, size);
+/// with `timeRanges`, --time-step takes a range of steps too.
+void addRenderOptions(CLI::App *command, RenderOptions &options, bool timeRanges = false);
 
 /// A mesh loaded for rendering: lower-dimensional cells reported, the field chosen.
 struct LoadedMesh {
@@ -43,6 +45,11 @@ struct LoadedMesh {
   double loadMs = 0.0;
 };
 LoadedMesh loadForRendering(const RenderOptions &options);
+/// The same for step `timeStep` rather than --time-step's.
+LoadedMesh loadForRendering(const RenderOptions &options, int timeStep);
+
+/// Warns on stderr when the --s1 given takes far more samples along the mesh's diagonal than the default.
+void warnOfSmallStep(const FrameSettings &settings, const VolumeMesh &mesh);
 
 /// Image size, background, backend, mode and sampling (0 for s1, s2, p and unit: the mesh's defaults),
 /// checked before the mesh is loaded, with the camera's options and --range (errors name the option).

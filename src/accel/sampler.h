@@ -20,12 +20,17 @@
 
 namespace uvr {
 
-/// The GPU's sampling: tets from their corners, walks across other cells where the volume has their
-/// adjacency, no trail.
+/// The GPU's sampling: tets from their corners, other cells tested one at a time, no trail.
 struct DeviceSampling {
   static constexpr bool kTetRecords = false; ///< read the per-tet records where the volume has them
-  static constexpr bool kCellWalks = true; ///< walk across cells other than tets where it has their adjacency
-  static constexpr bool kTrail = false;    ///< follow a CellTrail from ray to ray
+  static constexpr bool kCellWalks = false;  ///< walk across other cells than tets, given their adjacency
+  static constexpr bool kTrail = false;      ///< follow a CellTrail from ray to ray
+};
+
+/// The GPU's sampling of a mesh with other cells than tets whose adjacency it holds: walks across them too.
+/// A kernel of its own: the walks' code would cost a tet mesh's kernel registers and spills.
+struct DeviceCellWalkSampling : DeviceSampling {
+  static constexpr bool kCellWalks = true;
 };
 
 /// The host's sampling: all of the above. The GPU keeps no records (64 bytes per tet); its neighbouring rays

@@ -85,7 +85,14 @@ template <class Sampling, bool kPreintegrate> struct RayMarch {
     Vec4f color = result.color;
     uint32_t samples = result.samples;
     bool opaque = false;
-    for (float t = grid.at(k); closing || t < tb; k += stride, t = grid.at(k)) {
+    // Where a sample is the interval's first or follows one in the mesh and lies outside, a longer step goes
+    // on one spacing at a time up to where its next sample lies (kAligned): where the ray comes back into
+    // the mesh within the step (a hole, a concave boundary, a box reaching past its cells), the part inside
+    // is not lost with the sample that missed. Further on in a gap the step is kept: a long gap costs no
+    // more samples.
+    float kAligned = k, kNext = k;
+    bool lastInside = true;
+    for (float t = grid.at(k); closing || t < tb; k = kNext, t = grid.at(k)) {
       // Grid points in the gaps between the ray's crossings out of the mesh and back in are passed over; the
       // march goes on from the tet the ray re-enters by.
       if (!closing && intervals.hasGaps()) {
@@ -103,6 +110,8 @@ template <class Sampling, bool kPreintegrate> struct RayMarch {
       ++samples;
       float value;
       const bool inside = sampler.sample(t, k, walkSteps, far, value);
+      const bool refining = kAligned > k;
+      kNext = refining ? (inside ? kAligned : k + 1.f) : k + stride;
       if constexpr (kPreintegrate) {
         // The pending segment ends here: at its end (closing, or the next sample joining it) it runs to the
         // value there, else (outside the mesh, or past a gap) it keeps its own. One call site: the GPU's
@@ -117,25 +126,32 @@ template <class Sampling, bool kPreintegrate> struct RayMarch {
             opaque = true;
             break;
           }
-          k = kStart - stride; // the loop's increment brings it to kStart
+          kNext = kStart;
           continue;
         }
       }
-      if (!inside)
+      const bool entering = lastInside;
+      lastInside = inside;
+      if (!inside) {
+        if (entering && !refining && stride > 1.f) {
+          kAligned = k + stride;
+          kNext = k + 1.f;
+        }
         continue;
+      }
       if (first) {
         hint = sampler.cell();
         first = false;
       }
-      const bool last = !(grid.at(k + stride) < tb);
+      const bool last = !(grid.at(kNext) < tb);
       if constexpr (kPreintegrate) {
-        pending = {value, k, last ? kEnd : k + stride, true};
+        pending = {value, k, last ? kEnd : kNext, true};
       } else {
         const Vec4f c = scene.tf.sample(value);
         if (c.w <= 0.f)
           continue;
         compositeBehind(color, {c.x, c.y, c.z,
-                                correctedOpacity(c.w, (last ? kEnd - k : stride) * spacing, settings.unit)});
+                                correctedOpacity(c.w, ((last ? kEnd : kNext) - k) * spacing, settings.unit)});
       }
       if (color.w >= settings.terminationOpacity) {
         opaque = true;

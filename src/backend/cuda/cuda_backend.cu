@@ -41,7 +41,7 @@ dim3 renderBlock(RenderMode mode, bool tiles) {
 /// docs/results/log.md.)
 constexpr int kMarchingBlocksPerSm = 5, kSkippingBlocksPerSm = 4;
 
-template <int BlocksPerSm, bool kPreintegrate>
+template <class Sampling, int BlocksPerSm, bool kPreintegrate>
 __global__ void __launch_bounds__(kRenderBlockThreads, BlocksPerSm)
     renderKernel(SceneView scene, IntegratorSettings settings, CameraView camera, PixelTarget target,
                  int height, const uint64_t *crossingStart, const uint64_t *crossingKeys,
@@ -56,7 +56,7 @@ __global__ void __launch_bounds__(kRenderBlockThreads, BlocksPerSm)
       crossings =
           pixelCrossings(crossingStart, crossingKeys, uint64_t(y) * uint64_t(target.width) + uint64_t(x));
     const RayResult result =
-        integrateRay<DeviceSampling, kPreintegrate>(scene, settings, camera.ray(x, y), hint, crossings);
+        integrateRay<Sampling, kPreintegrate>(scene, settings, camera.ray(x, y), hint, crossings);
     target.store(x, y, result);
     taken = result.samples;
   }
@@ -72,6 +72,14 @@ __global__ void __launch_bounds__(kRenderBlockThreads, BlocksPerSm)
     atomicAdd(&samples->total, total);
     atomicMax(&samples->max, most);
   }
+}
+
+/// The render kernel for `Sampling`, the marching or the skipping modes' block count, and the compositing.
+template <class Sampling> auto chooseRenderKernel(bool skipping, bool preintegrate) {
+  return preintegrate ? (skipping ? renderKernel<Sampling, kSkippingBlocksPerSm, true>
+                                  : renderKernel<Sampling, kMarchingBlocksPerSm, true>)
+                      : (skipping ? renderKernel<Sampling, kSkippingBlocksPerSm, false>
+                                  : renderKernel<Sampling, kMarchingBlocksPerSm, false>);
 }
 
 } // namespace
@@ -274,11 +282,9 @@ SampleTotals CudaBackend::render(const CameraView &camera, const IntegratorSetti
   if (crossings)
     d.crossings.find(d.scene.mesh, d.accel.boundaryFaceList, deviceCamera, pixels);
   const uint64_t *crossingStart = crossings ? d.crossings.start() : nullptr;
-  const auto kernel =
-      settings.preintegrate
-          ? (skipping ? renderKernel<kSkippingBlocksPerSm, true> : renderKernel<kMarchingBlocksPerSm, true>)
-          : (skipping ? renderKernel<kSkippingBlocksPerSm, false>
-                      : renderKernel<kMarchingBlocksPerSm, false>);
+  const auto kernel = d.accel.cellNeighbors.size() > 0
+                          ? chooseRenderKernel<DeviceCellWalkSampling>(skipping, settings.preintegrate)
+                          : chooseRenderKernel<DeviceSampling>(skipping, settings.preintegrate);
   UVR_CUDA_CHECK(cudaEventRecord(d.renderStart));
   kernel<<<grid, block>>>(d.scene, settings, deviceCamera, device, height, crossingStart, d.crossings.keys(),
                           d.sampleTotals.data());
