@@ -24,7 +24,8 @@ struct CameraView {
     const float u = 2.f * (float(x) + 0.5f) / float(width) - 1.f;
     const float v = 1.f - 2.f * (float(y) + 0.5f) / float(height);
     Ray ray = makeRay(eye, normalize(forward + right * u + up * v));
-    if (limits)
+    // Rays past the frame's edge (the CPU's look-ahead to the next row) have no limit of their own.
+    if (limits && x >= 0 && x < width && y >= 0 && y < height)
       ray.tMax = limits[size_t(y) * size_t(width) + size_t(x)];
     return ray;
   }
