@@ -8,10 +8,13 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <dlfcn.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <deque>
+#include <filesystem>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -487,6 +490,14 @@ PYBIND11_MODULE(uvr, m) {
   m.doc() = "uvr: volume rendering of unstructured meshes with space skipping and adaptive sampling";
   // Every uvr::Error surfaces as uvr.Error (a RuntimeError) with the message `uvr render` prints.
   py::register_exception<Error>(m, "Error", PyExc_RuntimeError);
+  // uvr.vtk, built where VTK is, lies in the folder uvr/ beside this module: as the module's __path__ it
+  // lets `import uvr.vtk` find it.
+  Dl_info self;
+  if (dladdr(reinterpret_cast<void *>(&pybind11_init_uvr), &self) && self.dli_fname) {
+    py::list path;
+    path.append((std::filesystem::path(self.dli_fname).parent_path() / "uvr").string());
+    m.attr("__path__") = path;
+  }
 
   py::class_<Camera>(m, "Camera", "A pinhole camera as ParaView describes one; fovy in degrees, vertical.")
       .def(py::init([](const py::object &eye, const py::object &at, const py::object &up, float fovy) {

@@ -5,8 +5,8 @@
   layer and of the layers below, not those of a layer above nor of another layer of the same rank, and any
   public header <uvr/...>.
 - include/uvr/ (the public API): only other <uvr/...> headers and the standard library.
-- The front ends (apps/, python/): <uvr/...>, their own headers (under apps/) and third-party libraries;
-  no internal header.
+- The front ends (apps/, python/, the VTK mapper in vtk/, the ParaView plugin in paraview/): <uvr/...>, their
+  own headers (under apps/ and vtk/) and third-party libraries; no internal header.
 
 Usage: check_layers.py SOURCE_DIR
 """
@@ -22,7 +22,7 @@ LAYERS = ["core", "mesh", ("io", "accel", "image", "gen"), "render", "backend", 
 KNOWN = set()
 
 INCLUDE = re.compile(r'^\s*#\s*include\s*([<"])([^>"]+)[>"]', re.MULTILINE)
-SOURCE_SUFFIXES = (".h", ".hpp", ".cpp", ".cu", ".cuh")
+SOURCE_SUFFIXES = (".h", ".hpp", ".cpp", ".cxx", ".cu", ".cuh")
 
 
 def ranks():
@@ -93,10 +93,12 @@ def check(top):
                 continue
             found.append((rel, header, "a public header includes only <uvr/...> and the standard library"))
 
-    for front_end in (apps, os.path.join(top, "python")):
+    front_ends = [apps] + [os.path.join(top, d) for d in ("python", "vtk", "paraview")]
+    for front_end in front_ends:
         for path in sources(front_end):
             rel = os.path.relpath(path, top)
-            own = [os.path.dirname(path)] + [os.path.join(apps, d) for d in sorted(os.listdir(apps))]
+            own = [os.path.dirname(path), os.path.join(top, "vtk")] + [os.path.join(apps, d) for d in
+                                                                      sorted(os.listdir(apps))]
             for kind, header in includes(path):
                 if header.startswith("uvr/"):
                     if kind == '"' or not public_header(header):
@@ -120,6 +122,8 @@ def self_test():
         "include/uvr/p.h": "#include <vector>\n#include <tbb/tbb.h>\n",
         "apps/x/main.cpp": '#include "mesh/b.h"\n#include <uvr/p.h>\n#include "own.h"\n',
         "apps/x/own.h": "",
+        "vtk/m.cxx": '#include "mesh/b.h"\n#include <vtkObject.h>\n#include "m.h"\n',
+        "vtk/m.h": "",
     }
     with tempfile.TemporaryDirectory() as top:
         for name, text in files.items():
@@ -128,7 +132,7 @@ def self_test():
                 f.write(text)
         got = {(f, h) for f, h, _ in check(top)}
     expected = {("src/core/a.h", "mesh/b.h"), ("src/io/c.h", "gen/d.h"), ("include/uvr/p.h", "tbb/tbb.h"),
-                ("apps/x/main.cpp", "mesh/b.h")}
+                ("apps/x/main.cpp", "mesh/b.h"), ("vtk/m.cxx", "mesh/b.h")}
     if got != expected:
         sys.exit(f"check_layers.py: the self-test found {sorted(got)}, expected {sorted(expected)}")
 

@@ -4,6 +4,7 @@
 #include <uvr/vec.h>
 
 #include <cstdint>
+#include <span>
 #include <string>
 
 namespace uvr {
@@ -83,6 +84,10 @@ struct FrameSettings {
   /// Return the premultiplied colour and opacity per pixel as floats, before the background: what frames of
   /// several pieces of a mesh are composited from.
   bool keepPremultipliedRgba = false;
+  /// Empty, or width x height distances from the eye, row-major, top row first: each pixel's ray ends there
+  /// (+inf: it does not), so that opaque geometry drawn by another renderer (its depth buffer converted to
+  /// distances) hides the volume behind it. Viewed, not copied: the array must outlive the frame.
+  std::span<const float> rayLimits;
 };
 
 /// `settings` with its defaults filled in (0 for s1, s2, p or unit) for a mesh of default step `defaultStep`
@@ -99,7 +104,8 @@ float defaultUnitDistance(const Box3f &bounds, uint64_t cells);
 
 /// Throws uvr::Error for settings no frame can be drawn with: a negative or non-finite s1, s2, p or unit (0
 /// asks for the default), s2 < s1 or p < 1 where both are given, a size outside 1..16384, or a background
-/// outside [0, 1]. The message names the setting.
+/// outside [0, 1], or ray limits that are not one non-negative number (or +inf) per pixel. The message names
+/// the setting.
 void validateSettings(const FrameSettings &settings);
 
 } // namespace uvr

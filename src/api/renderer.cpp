@@ -206,6 +206,7 @@ void VolumeRenderer::render(const Camera &camera, const FrameSettings &settings,
   internal.keepOpacity = s.keepOpacity;
   internal.keepSamplesPerPixel = s.keepSamplesPerPixel;
   internal.keepPremultipliedRgba = s.keepPremultipliedRgba;
+  internal.rayLimits = s.rayLimits.empty() ? nullptr : s.rayLimits.data();
 
   Frame frame; // the result's buffers, to be reused
   frame.image = std::move(result.image);

@@ -124,6 +124,14 @@ void validateSettings(const FrameSettings &s) {
     if (!(c >= 0.f && c <= 1.f))
       throw Error("background components must be in [0, 1]; got " + std::to_string(s.background.x) + "," +
                   std::to_string(s.background.y) + "," + std::to_string(s.background.z));
+  if (!s.rayLimits.empty()) {
+    if (s.rayLimits.size() != size_t(s.width) * size_t(s.height))
+      throw Error("rayLimits must hold one distance per pixel (" + std::to_string(s.width) + "x" +
+                  std::to_string(s.height) + "); got " + std::to_string(s.rayLimits.size()));
+    for (const float limit : s.rayLimits)
+      if (!(limit >= 0.f))
+        throw Error("rayLimits must be non-negative distances or +inf; got " + std::to_string(limit));
+  }
 }
 
 int threadCount() { return tbb::info::default_concurrency(); }

@@ -47,6 +47,7 @@ struct Ray {
   Vec3f origin;
   Vec3f direction;
   Vec3f invDirection;
+  float tMax = INFINITY; ///< where the ray ends: nothing beyond is sampled
 
   UVR_HOST_DEVICE Vec3f at(float t) const { return origin + direction * t; }
 };

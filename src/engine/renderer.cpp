@@ -168,7 +168,8 @@ void Renderer::render(const Camera &camera, const RenderSettings &settings, Fram
   derived.finestStepScale = wholeFinestStepScale_;
   const SampleTotals samples =
       backend(settings.backend)
-          .render(makeCameraView(camera, settings.width, settings.height), derived, target, frame.kernelMs);
+          .render(makeCameraView(camera, settings.width, settings.height, settings.rayLimits), derived,
+                  target, frame.kernelMs);
   frame.samplesTotal = samples.total;
   frame.samplesMax = samples.max;
 }

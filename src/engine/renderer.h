@@ -28,6 +28,9 @@ struct RenderSettings {
   bool keepOpacity = true;
   bool keepSamplesPerPixel = true;
   bool keepPremultipliedRgba = false;
+  /// Null, or width x height distances, top row first, where each pixel's ray ends
+  /// (FrameSettings::rayLimits).
+  const float *rayLimits = nullptr;
 };
 
 struct Frame {

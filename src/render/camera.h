@@ -17,15 +17,21 @@ struct CameraView {
   Vec3f right; ///< spans half the image width at unit distance
   Vec3f up;    ///< spans half the image height at unit distance
   int width = 0, height = 0;
+  /// Null, or where each pixel's ray ends, row-major (FrameSettings::rayLimits); on the backend's side.
+  const float *limits = nullptr;
 
   UVR_HOST_DEVICE Ray ray(int x, int y) const {
     const float u = 2.f * (float(x) + 0.5f) / float(width) - 1.f;
     const float v = 1.f - 2.f * (float(y) + 0.5f) / float(height);
-    return makeRay(eye, normalize(forward + right * u + up * v));
+    Ray ray = makeRay(eye, normalize(forward + right * u + up * v));
+    // Rays past the frame's edge (the CPU's look-ahead to the next row) have no limit of their own.
+    if (limits && x >= 0 && x < width && y >= 0 && y < height)
+      ray.tMax = limits[size_t(y) * size_t(width) + size_t(x)];
+    return ray;
   }
 };
 
-inline CameraView makeCameraView(const Camera &camera, int width, int height) {
+inline CameraView makeCameraView(const Camera &camera, int width, int height, const float *limits = nullptr) {
   CameraView view;
   view.eye = camera.eye;
   view.forward = normalize(camera.at - camera.eye);
@@ -36,6 +42,7 @@ inline CameraView makeCameraView(const Camera &camera, int width, int height) {
   view.up = up * halfHeight;
   view.width = width;
   view.height = height;
+  view.limits = limits;
   return view;
 }
 

@@ -125,7 +125,7 @@ public:
     // No early return: the fields then take one value on every path, which leaves the GPU's kernel fewer
     // values to keep (it spilled more with returns here).
     float tEnter;
-    bool hit = intersectBox(ray, scene.partitions.rootBounds, 0.f, INFINITY, tEnter, tExit_);
+    bool hit = intersectBox(ray, scene.partitions.rootBounds, 0.f, ray.tMax, tEnter, tExit_);
     float gridOrigin = tEnter;
     if (!settings.clip.empty()) {
       float gridExit, clipEnter, clipExit;

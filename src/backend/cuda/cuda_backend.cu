@@ -137,6 +137,7 @@ struct CudaBackend::Impl {
   DeviceBuffer<float> rgba;
   DeviceBuffer<uint32_t> samples;
   DeviceBuffer<SampleTotals> sampleTotals;
+  DeviceBuffer<float> rayLimits;
   DeviceCrossings crossings;
   PinnedBuffer staging;                                   // the frame's arrays on their way to the caller's
   cudaEvent_t kernelStart = nullptr, kernelEnd = nullptr; // around the frame's kernels
@@ -278,6 +279,10 @@ SampleTotals CudaBackend::render(const CameraView &camera, const IntegratorSetti
   d.rgba.resize(target.rgba ? 4 * pixels : 0);
   d.sampleTotals.resize(1);
   UVR_CUDA_CHECK(cudaMemsetAsync(d.sampleTotals.data(), 0, d.sampleTotals.bytes()));
+  // The rays read their limits on the GPU.
+  CameraView deviceCamera = camera;
+  if (camera.limits)
+    deviceCamera.limits = d.rayLimits.upload(camera.limits, pixels);
   PixelTarget device = target;
   device.rgb = d.rgb.data();
   device.opacity = target.opacity ? d.opacity.data() : nullptr;
@@ -295,13 +300,13 @@ SampleTotals CudaBackend::render(const CameraView &camera, const IntegratorSetti
   const bool crossings =
       skipsSpace(settings.mode) && faces > 0 && crossingsApply(camera, d.scene.partitions.rootBounds);
   if (crossings)
-    d.crossings.find(d.scene.mesh, d.accel.boundaryFaceList, camera, pixels);
+    d.crossings.find(d.scene.mesh, d.accel.boundaryFaceList, deviceCamera, pixels);
   const uint64_t *crossingStart = crossings ? d.crossings.start() : nullptr;
   const auto kernel = d.accel.cellNeighbors.size() > 0
                           ? chooseRenderKernel<DeviceCellWalkSampling>(skipping, settings.preintegrate)
                           : chooseRenderKernel<DeviceSampling>(skipping, settings.preintegrate);
   UVR_CUDA_CHECK(cudaEventRecord(d.renderStart));
-  kernel<<<grid, block>>>(d.scene, settings, camera, device, height, crossingStart, d.crossings.keys(),
+  kernel<<<grid, block>>>(d.scene, settings, deviceCamera, device, height, crossingStart, d.crossings.keys(),
                           d.sampleTotals.data());
   UVR_CUDA_CHECK(cudaGetLastError());
   UVR_CUDA_CHECK(cudaEventRecord(d.kernelEnd));
