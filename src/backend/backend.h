@@ -34,6 +34,9 @@ public:
   /// transfer function, are recomputed. Returns how many partitions are fully transparent (0 without a
   /// transfer function).
   virtual uint32_t setField(const MeshView &view) = 0;
+  /// Takes the field's gradient, `count` vectors per point (host memory, which must outlive the backend or
+  /// the next call), for shaded frames (IntegratorSettings::shade); null drops it.
+  virtual void setGradients(const Vec3f *gradients, uint64_t count) = 0;
   /// Draws a frame of `camera.width` x `camera.height` pixels into `target` (its host buffers) with the
   /// current transfer function; returns the samples taken. `kernelMs` is the GPU time of the frame's
   /// kernels, without copies; 0 on the CPU.

@@ -1,10 +1,13 @@
 #include "engine/renderer.h"
 
 #include "backend/cpu/cpu_backend.h"
+#include "mesh/point_gradients.h"
 #include "render/pixel.h"
 #include <uvr/error.h>
 #include <uvr/system.h>
 
+#include <algorithm>
+#include <cmath>
 #include <sstream>
 
 namespace uvr {
@@ -44,6 +47,16 @@ void Renderer::setField(const Mesh &mesh, int fieldIndex) {
   for (const std::unique_ptr<RenderBackend> &b : backends_)
     if (b)
       transparentPartitions_ = b->setField(meshView_);
+  if (gradientsBuilt_)
+    buildGradients();
+}
+
+void Renderer::buildGradients() {
+  gradients_ = computePointGradients(meshView_, mesh_->points.size());
+  gradientsBuilt_ = true;
+  for (const std::unique_ptr<RenderBackend> &b : backends_)
+    if (b)
+      b->setGradients(gradients_.data(), gradients_.size());
 }
 
 const TransferFunction &Renderer::transferFunction() const {
@@ -57,6 +70,8 @@ void Renderer::prepare(Backend which) {
   if (b)
     return;
   b = makeBackend(which, *mesh_, meshView_, leafSize());
+  if (gradientsBuilt_)
+    b->setGradients(gradients_.data(), gradients_.size());
   if (tf_)
     transparentPartitions_ = b->setTransferFunction(*tf_);
 }
@@ -144,9 +159,20 @@ void Renderer::render(const Camera &camera, const RenderSettings &settings, Fram
   target.background = settings.background;
   IntegratorSettings derived = s;
   derived.finestStepSigma = finestStepSigma(s.s1, s.s2, s.p);
-  const SampleTotals samples =
-      backend(settings.backend)
-          .render(makeCameraView(camera, settings.width, settings.height), derived, target, frame.kernelMs);
+  const CameraView view = makeCameraView(camera, settings.width, settings.height);
+  if (s.shade) {
+    if (!gradientsBuilt_)
+      buildGradients();
+    ShadingSettings &shading = derived.shading;
+    const Vec3f light = s.shading.light; // in camera space: x right, y up, z towards the eye
+    shading.light = normalize(normalize(view.right) * light.x + normalize(view.up) * light.y -
+                              view.forward * light.z);
+    // Fully lit where the field changes by kFullyLitChange of the function's range across a mean cell.
+    const float range = tf_->valueMax() - tf_->valueMin();
+    const float meanCell = diagonal_ / std::cbrt(float(std::max<uint64_t>(mesh_->cellCount(), 1)));
+    shading.fullGradientInverse = range > 0.f ? meanCell / (kFullyLitChange * range) : 0.f;
+  }
+  const SampleTotals samples = backend(settings.backend).render(view, derived, target, frame.kernelMs);
   frame.samplesTotal = samples.total;
   frame.samplesMax = samples.max;
 }

@@ -12,6 +12,7 @@
 #include "mesh/cell.h"
 #include "render/boundary_crossings.h"
 #include "render/scene_view.h"
+#include "render/shading.h"
 #include "render/transfer_function.h"
 
 #include <uvr/settings.h>
@@ -44,6 +45,10 @@ struct IntegratorSettings {
   /// s1 outright, and subtrees of such partitions are marched whole. The default, +inf, computes every
   /// partition's step and, when sampling adaptively, marches every partition alone.
   float finestStepSigma = INFINITY;
+  /// Light the samples by the field's gradient (SceneView::gradients): the backends pick
+  /// integrateRay<.., .., true>.
+  bool shade = false;
+  ShadingSettings shading;
 };
 
 /// The paper's step size for a partition of normalised deviation `sigma` (§2.4).

@@ -46,6 +46,7 @@ SceneView CpuBackend::sceneView() const {
   scene.nodeMinSigma = metadata_.nodeMinSigma.data();
   scene.sigma = metadata_.sigma.data();
   scene.tf = tf_->view();
+  scene.gradients = gradients_;
   return scene;
 }
 
@@ -53,6 +54,8 @@ SampleTotals CpuBackend::render(const CameraView &camera, const IntegratorSettin
                                 const PixelTarget &target, double &kernelMs) {
   kernelMs = 0.0;
   const SceneView scene = sceneView();
+  if (settings.shade && !scene.gradients)
+    throw Error("a shaded frame needs the field's gradients");
   const std::vector<uint32_t> &boundaryFaces = accel_.boundaryFaceList;
   std::vector<uint64_t> crossingStart, crossingKeys;
   const bool crossings = skipsSpace(settings.mode) && !boundaryFaces.empty() &&
@@ -93,11 +96,18 @@ SampleTotals CpuBackend::render(const CameraView &camera, const IntegratorSettin
                 crossings ? pixelCrossings(crossingStart.data(), crossingKeys.data(), pixel)
                           : BoundaryCrossings{};
             // A ray that crosses no boundary face is done at once.
-            const RayResult result =
-                along.none() ? RayResult{}
-                : settings.preintegrate
-                    ? integrateRay<HostSampling, true>(scene, settings, ray, hint, along, trail)
-                    : integrateRay<HostSampling, false>(scene, settings, ray, hint, along, trail);
+            const RayResult result = along.none() ? RayResult{}
+                                     : settings.shade
+                                         ? settings.preintegrate
+                                               ? integrateRay<HostSampling, true, true>(scene, settings, ray,
+                                                                                        hint, along, trail)
+                                               : integrateRay<HostSampling, false, true>(scene, settings, ray,
+                                                                                         hint, along, trail)
+                                     : settings.preintegrate
+                                         ? integrateRay<HostSampling, true>(scene, settings, ray, hint, along,
+                                                                            trail)
+                                         : integrateRay<HostSampling, false>(scene, settings, ray, hint, along,
+                                                                             trail);
             ray = next;
             target.store(x, y, result);
             tileSamples.total += result.samples;

@@ -41,7 +41,7 @@ dim3 renderBlock(RenderMode mode, bool tiles) {
 /// docs/results/log.md.)
 constexpr int kMarchingBlocksPerSm = 5, kSkippingBlocksPerSm = 4;
 
-template <class Sampling, int BlocksPerSm, bool kPreintegrate>
+template <class Sampling, int BlocksPerSm, bool kPreintegrate, bool kShade>
 __global__ void __launch_bounds__(kRenderBlockThreads, BlocksPerSm)
     renderKernel(SceneView scene, IntegratorSettings settings, CameraView camera, PixelTarget target,
                  int height, const uint64_t *crossingStart, const uint64_t *crossingKeys,
@@ -56,7 +56,7 @@ __global__ void __launch_bounds__(kRenderBlockThreads, BlocksPerSm)
       crossings =
           pixelCrossings(crossingStart, crossingKeys, uint64_t(y) * uint64_t(target.width) + uint64_t(x));
     const RayResult result =
-        integrateRay<Sampling, kPreintegrate>(scene, settings, camera.ray(x, y), hint, crossings);
+        integrateRay<Sampling, kPreintegrate, kShade>(scene, settings, camera.ray(x, y), hint, crossings);
     target.store(x, y, result);
     taken = result.samples;
   }
@@ -74,12 +74,18 @@ __global__ void __launch_bounds__(kRenderBlockThreads, BlocksPerSm)
   }
 }
 
-/// The render kernel for `Sampling`, the marching or the skipping modes' block count, and the compositing.
-template <class Sampling> auto chooseRenderKernel(bool skipping, bool preintegrate) {
-  return preintegrate ? (skipping ? renderKernel<Sampling, kSkippingBlocksPerSm, true>
-                                  : renderKernel<Sampling, kMarchingBlocksPerSm, true>)
-                      : (skipping ? renderKernel<Sampling, kSkippingBlocksPerSm, false>
-                                  : renderKernel<Sampling, kMarchingBlocksPerSm, false>);
+/// The render kernel for `Sampling`, the marching or the skipping modes' block count, the compositing and
+/// the shading.
+template <class Sampling, bool kShade> auto chooseRenderKernel(bool skipping, bool preintegrate) {
+  return preintegrate ? (skipping ? renderKernel<Sampling, kSkippingBlocksPerSm, true, kShade>
+                                  : renderKernel<Sampling, kMarchingBlocksPerSm, true, kShade>)
+                      : (skipping ? renderKernel<Sampling, kSkippingBlocksPerSm, false, kShade>
+                                  : renderKernel<Sampling, kMarchingBlocksPerSm, false, kShade>);
+}
+
+template <class Sampling> auto chooseRenderKernel(bool skipping, bool preintegrate, bool shade) {
+  return shade ? chooseRenderKernel<Sampling, true>(skipping, preintegrate)
+               : chooseRenderKernel<Sampling, false>(skipping, preintegrate);
 }
 
 } // namespace
@@ -121,6 +127,7 @@ struct CudaBackend::Impl {
   DeviceBuffer<Vec3f> points;
   DeviceBuffer<uint32_t> tets, pyramids, wedges, hexes;
   DeviceBuffer<float> values;
+  DeviceBuffer<Vec3f> gradients; // per point, for shaded frames
   uint64_t pointCount = 0;
   DeviceAcceleration accel;
   double buildMs = 0.0;
@@ -244,6 +251,16 @@ uint32_t CudaBackend::setField(const MeshView &view) {
   return d.tf ? d.metadata.update(*d.tf, d.scene.partitions) : 0;
 }
 
+void CudaBackend::setGradients(const Vec3f *gradients, uint64_t count) {
+  Impl &d = *impl_;
+  if (gradients) {
+    d.scene.gradients = d.gradients.upload(gradients, count);
+  } else {
+    d.gradients.release();
+    d.scene.gradients = nullptr;
+  }
+}
+
 PartitionMetadata CudaBackend::metadata() const {
   return impl_->metadata.download(impl_->scene.partitions.count);
 }
@@ -277,9 +294,12 @@ SampleTotals CudaBackend::render(const CameraView &camera, const IntegratorSetti
   if (crossings)
     d.crossings.find(d.scene.mesh, d.accel.boundaryFaceList, camera, pixels);
   const uint64_t *crossingStart = crossings ? d.crossings.start() : nullptr;
-  const auto kernel = d.accel.cellNeighbors.size() > 0
-                          ? chooseRenderKernel<DeviceCellWalkSampling>(skipping, settings.preintegrate)
-                          : chooseRenderKernel<DeviceSampling>(skipping, settings.preintegrate);
+  if (settings.shade && !d.scene.gradients)
+    throw Error("a shaded frame needs the field's gradients");
+  const auto kernel =
+      d.accel.cellNeighbors.size() > 0
+          ? chooseRenderKernel<DeviceCellWalkSampling>(skipping, settings.preintegrate, settings.shade)
+          : chooseRenderKernel<DeviceSampling>(skipping, settings.preintegrate, settings.shade);
   UVR_CUDA_CHECK(cudaEventRecord(d.renderStart));
   kernel<<<grid, block>>>(d.scene, settings, camera, device, height, crossingStart, d.crossings.keys(),
                           d.sampleTotals.data());
@@ -354,7 +374,7 @@ size_t CudaBackend::deviceMemoryBytes() const {
 size_t CudaBackend::deviceSceneBytes() const {
   const Impl &d = *impl_;
   return d.points.bytes() + d.tets.bytes() + d.pyramids.bytes() + d.wedges.bytes() + d.hexes.bytes() +
-         d.values.bytes() + d.accel.bytes() + d.metadata.bytes() + d.tfTable.bytes() + d.tfPrefixSum.bytes() +
+         d.values.bytes() + d.gradients.bytes() + d.accel.bytes() + d.metadata.bytes() + d.tfTable.bytes() + d.tfPrefixSum.bytes() +
          d.tfPrefixSquares.bytes() + d.tfOpacityMax.bytes() + d.tfExtinction.bytes() +
          d.tfExtinctionIntegral.bytes();
 }

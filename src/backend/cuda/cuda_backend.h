@@ -31,6 +31,8 @@ public:
   /// Uploads the field of `view` (host pointers, same points and cells) and its partitions' value ranges,
   /// computed on the host, and recomputes the metadata on the GPU.
   uint32_t setField(const MeshView &view) override;
+  /// Uploads the field's gradient per point, for shaded frames.
+  void setGradients(const Vec3f *gradients, uint64_t count) override;
   /// Copies the metadata of the last setTransferFunction back, for checks against the host's.
   PartitionMetadata metadata() const override;
   /// Copies the acceleration data the GPU built back, for checks against the host's builds.
