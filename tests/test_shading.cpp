@@ -18,7 +18,8 @@ const Box3f kBox{{-1.f, -1.f, -1.f}, {1.f, 1.f, 1.f}};
 TransferFunction opaqueAboveHalf() {
   ColorMap map;
   map.rgbPoints = {0.f, 0.9f, 0.6f, 0.3f, 1.f, 0.9f, 0.6f, 0.3f};
-  map.opacityPoints = {0.f, 0.f, 0.5f, 0.f, 0.45f, 0.f, 0.5f, 0.f, 0.55f, 1.f, 0.5f, 0.f, 1.f, 1.f, 0.5f, 0.f};
+  map.opacityPoints = {0.f,   0.f, 0.5f, 0.f, 0.45f, 0.f, 0.5f, 0.f,
+                       0.55f, 1.f, 0.5f, 0.f, 1.f,   1.f, 0.5f, 0.f};
   return TransferFunction(map, 0.f, 1.f);
 }
 
@@ -92,7 +93,9 @@ TEST(PointGradients, CellDataTakesThePointAveragedField) {
 }
 
 TEST(Shading, LeavesAConstantFieldUnchanged) {
-  const Mesh mesh = buildMesh(makeBoxGrid(CellType::Tetra, 6, kBox, [](Vec3f) { return 0.7f; }, 0.2f), "box");
+  const Mesh mesh = buildMesh(makeBoxGrid(
+                                  CellType::Tetra, 6, kBox, [](Vec3f) { return 0.7f; }, 0.2f),
+                              "box");
   Renderer renderer(mesh, mesh.findField("f"), 16);
   renderer.setTransferFunction(opaqueAboveHalf());
   for (bool preintegrate : {false, true}) {
@@ -106,8 +109,9 @@ TEST(Shading, LeavesAConstantFieldUnchanged) {
 
 TEST(Shading, ChangesTheImageWhereTheGradientIsLarge) {
   // A ball: the field falls from 1 at the centre, and the function makes it opaque within radius 0.5.
-  const Mesh mesh = buildMesh(
-      makeBoxGrid(CellType::Tetra, 14, kBox, [](Vec3f p) { return 1.f - length(p); }, 0.2f), "ball");
+  const Mesh mesh = buildMesh(makeBoxGrid(
+                                  CellType::Tetra, 14, kBox, [](Vec3f p) { return 1.f - length(p); }, 0.2f),
+                              "ball");
   Renderer renderer(mesh, mesh.findField("f"), 32);
   renderer.setTransferFunction(opaqueAboveHalf());
   for (bool preintegrate : {false, true}) {
@@ -123,8 +127,9 @@ TEST(Shading, ChangesTheImageWhereTheGradientIsLarge) {
 }
 
 TEST(Shading, TheSideFacingTheLightIsBrighter) {
-  const Mesh mesh = buildMesh(
-      makeBoxGrid(CellType::Tetra, 14, kBox, [](Vec3f p) { return 1.f - length(p); }, 0.2f), "ball");
+  const Mesh mesh = buildMesh(makeBoxGrid(
+                                  CellType::Tetra, 14, kBox, [](Vec3f p) { return 1.f - length(p); }, 0.2f),
+                              "ball");
   Renderer renderer(mesh, mesh.findField("f"), 32);
   renderer.setTransferFunction(opaqueAboveHalf());
   for (bool preintegrate : {false, true}) {
@@ -145,9 +150,12 @@ TEST(Shading, TheSideFacingTheLightIsBrighter) {
 
 TEST(Shading, FollowsANewField) {
   // setField recomputes the gradients: after a switch to a constant field, shading changes nothing.
-  Mesh ball = buildMesh(
-      makeBoxGrid(CellType::Tetra, 8, kBox, [](Vec3f p) { return 1.f - length(p); }, 0.2f), "ball");
-  const Mesh flat = buildMesh(makeBoxGrid(CellType::Tetra, 8, kBox, [](Vec3f) { return 0.7f; }, 0.2f), "flat");
+  Mesh ball = buildMesh(makeBoxGrid(
+                            CellType::Tetra, 8, kBox, [](Vec3f p) { return 1.f - length(p); }, 0.2f),
+                        "ball");
+  const Mesh flat = buildMesh(makeBoxGrid(
+                                  CellType::Tetra, 8, kBox, [](Vec3f) { return 0.7f; }, 0.2f),
+                              "flat");
   Renderer renderer(ball, ball.findField("f"), 16);
   renderer.setTransferFunction(opaqueAboveHalf());
   const Frame lit = renderer.render(frontCamera(), frame(true, true));

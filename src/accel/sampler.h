@@ -292,10 +292,10 @@ UVR_HOST_DEVICE UVR_HOST_INLINE bool locateSample(const VolumeView &volume, bool
   });
 }
 
-/// A per-point vector (the field's gradient) interpolated to `p`, the point at `t` on a ray, in `at.cell`, the
-/// cell the sampler found it in: a tet by the weights the walk carries (or, where it found the tet another
-/// way, its barycentric weights), another cell by its shape functions, or where their solve fails, the mean
-/// of its corners.
+/// A per-point vector (the field's gradient) interpolated to `p`, the point at `t` on a ray, in `at.cell`,
+/// the cell the sampler found it in: a tet by the weights the walk carries (or, where it found the tet
+/// another way, its barycentric weights), another cell by its shape functions, or where their solve fails,
+/// the mean of its corners.
 UVR_HOST_DEVICE inline Vec3f interpolatePointVectors(const MeshView &mesh, const Vec3f *perPoint,
                                                      const RayCell &at, Vec3f p, float t) {
   int count;
@@ -305,8 +305,8 @@ UVR_HOST_DEVICE inline Vec3f interpolatePointVectors(const MeshView &mesh, const
     if (at.affine) {
       for (int i = 0; i < 4; ++i)
         w[i] = at.w[i] + (t - at.t) * at.dw[i];
-    } else if (!tetBarycentrics(mesh.points[v[0]], mesh.points[v[1]], mesh.points[v[2]], mesh.points[v[3]],
-                                p, w)) {
+    } else if (!tetBarycentrics(mesh.points[v[0]], mesh.points[v[1]], mesh.points[v[2]], mesh.points[v[3]], p,
+                                w)) {
       w[0] = w[1] = w[2] = w[3] = 0.25f;
     }
     return perPoint[v[0]] * w[0] + perPoint[v[1]] * w[1] + perPoint[v[2]] * w[2] + perPoint[v[3]] * w[3];

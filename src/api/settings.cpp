@@ -125,8 +125,8 @@ void validateSettings(const FrameSettings &s) {
                   std::to_string(s.background.y) + "," + std::to_string(s.background.z));
   if (!std::isfinite(s.light.x) || !std::isfinite(s.light.y) || !std::isfinite(s.light.z))
     throw Error("the light direction must be finite");
-  for (const auto &[value, name] : {std::pair{s.ambient, "ambient"}, std::pair{s.diffuse, "diffuse"},
-                                    std::pair{s.specular, "specular"}})
+  for (const auto &[value, name] :
+       {std::pair{s.ambient, "ambient"}, std::pair{s.diffuse, "diffuse"}, std::pair{s.specular, "specular"}})
     if (!(value >= 0.f) || !std::isfinite(value))
       throw Error(std::string(name) + " must be a finite number >= 0; got " + std::to_string(value));
   if (!(s.shininess >= 1.f) || !std::isfinite(s.shininess))

@@ -165,8 +165,8 @@ void Renderer::render(const Camera &camera, const RenderSettings &settings, Fram
       buildGradients();
     ShadingSettings &shading = derived.shading;
     const Vec3f light = s.shading.light; // in camera space: x right, y up, z towards the eye
-    shading.light = normalize(normalize(view.right) * light.x + normalize(view.up) * light.y -
-                              view.forward * light.z);
+    shading.light =
+        normalize(normalize(view.right) * light.x + normalize(view.up) * light.y - view.forward * light.z);
     // Fully lit where the field changes by kFullyLitChange of the function's range across a mean cell.
     const float range = tf_->valueMax() - tf_->valueMin();
     const float meanCell = diagonal_ / std::cbrt(float(std::max<uint64_t>(mesh_->cellCount(), 1)));

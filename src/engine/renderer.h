@@ -3,8 +3,8 @@
 #pragma once
 
 #include "backend/backend.h"
-#include "mesh/mesh.h"
 #include "core/vec.h"
+#include "mesh/mesh.h"
 #include "render/camera.h"
 #include "render/integrator.h"
 #include "render/transfer_function.h"

@@ -188,7 +188,8 @@ private:
   /// Composites the pending segment, its value running linearly to `endValue` at its end.
   UVR_HOST_DEVICE void closeSegment(Vec4f &color, float endValue, float spacing) {
     pending.valid = false;
-    Vec4f c = scene.tf.integrate(pending.value, endValue, (pending.next - pending.k) * spacing, settings.unit);
+    Vec4f c =
+        scene.tf.integrate(pending.value, endValue, (pending.next - pending.k) * spacing, settings.unit);
     if constexpr (kShade)
       c = shade(c, pendingGradient);
     compositeBehind(color, c);

@@ -96,18 +96,15 @@ SampleTotals CpuBackend::render(const CameraView &camera, const IntegratorSettin
                 crossings ? pixelCrossings(crossingStart.data(), crossingKeys.data(), pixel)
                           : BoundaryCrossings{};
             // A ray that crosses no boundary face is done at once.
-            const RayResult result = along.none() ? RayResult{}
-                                     : settings.shade
-                                         ? settings.preintegrate
-                                               ? integrateRay<HostSampling, true, true>(scene, settings, ray,
-                                                                                        hint, along, trail)
-                                               : integrateRay<HostSampling, false, true>(scene, settings, ray,
-                                                                                         hint, along, trail)
-                                     : settings.preintegrate
-                                         ? integrateRay<HostSampling, true>(scene, settings, ray, hint, along,
-                                                                            trail)
-                                         : integrateRay<HostSampling, false>(scene, settings, ray, hint, along,
-                                                                             trail);
+            const RayResult result =
+                along.none() ? RayResult{}
+                : settings.shade
+                    ? settings.preintegrate
+                          ? integrateRay<HostSampling, true, true>(scene, settings, ray, hint, along, trail)
+                          : integrateRay<HostSampling, false, true>(scene, settings, ray, hint, along, trail)
+                : settings.preintegrate
+                    ? integrateRay<HostSampling, true>(scene, settings, ray, hint, along, trail)
+                    : integrateRay<HostSampling, false>(scene, settings, ray, hint, along, trail);
             ray = next;
             target.store(x, y, result);
             tileSamples.total += result.samples;

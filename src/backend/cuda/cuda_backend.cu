@@ -374,8 +374,8 @@ size_t CudaBackend::deviceMemoryBytes() const {
 size_t CudaBackend::deviceSceneBytes() const {
   const Impl &d = *impl_;
   return d.points.bytes() + d.tets.bytes() + d.pyramids.bytes() + d.wedges.bytes() + d.hexes.bytes() +
-         d.values.bytes() + d.gradients.bytes() + d.accel.bytes() + d.metadata.bytes() + d.tfTable.bytes() + d.tfPrefixSum.bytes() +
-         d.tfPrefixSquares.bytes() + d.tfOpacityMax.bytes() + d.tfExtinction.bytes() +
+         d.values.bytes() + d.gradients.bytes() + d.accel.bytes() + d.metadata.bytes() + d.tfTable.bytes() +
+         d.tfPrefixSum.bytes() + d.tfPrefixSquares.bytes() + d.tfOpacityMax.bytes() + d.tfExtinction.bytes() +
          d.tfExtinctionIntegral.bytes();
 }
 
