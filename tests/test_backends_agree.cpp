@@ -209,8 +209,8 @@ TEST(BackendsAgree, CudaShadesAsTheCpu) {
         settings.integrator.unit = 0.1f;
         settings.integrator.preintegrate = preintegrate;
         settings.integrator.shade = true;
-        settings.integrator.shading.headlight = headlight;
-        settings.integrator.shading.light = {1.f, 1.f, 1.f};
+        settings.shading.headlight = headlight;
+        settings.shading.light = {1.f, 1.f, 1.f};
         const Frame cpu = renderer.render(camera, settings);
         settings.backend = Backend::Cuda;
         const Frame cuda = renderer.render(camera, settings);

@@ -134,9 +134,9 @@ TEST(Shading, TheSideFacingTheLightIsBrighter) {
   renderer.setTransferFunction(opaqueAboveHalf());
   for (bool preintegrate : {false, true}) {
     RenderSettings settings = frame(true, preintegrate);
-    settings.integrator.shading.headlight = false;
+    settings.shading.headlight = false;
     for (float side : {1.f, -1.f}) {
-      settings.integrator.shading.light = {side, 0.f, 1.f}; // camera space: from the right or the left
+      settings.shading.light = {side, 0.f, 1.f}; // camera space: from the right or the left
       const Image image = renderer.render(frontCamera(), settings).image;
       const int half = image.width / 2;
       const double right = brightness(image, half, image.width), left = brightness(image, 0, half);

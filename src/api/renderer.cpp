@@ -190,7 +190,7 @@ void VolumeRenderer::render(const Camera &camera, const FrameSettings &settings,
   internal.integrator.preintegrate = preintegrates(s.compositing, s.mode);
   internal.integrator.followMesh = stepsFollowMesh(s.steps, s.mode);
   internal.integrator.shade = s.shade;
-  ShadingSettings &shading = internal.integrator.shading;
+  ShadingSettings &shading = internal.shading;
   shading.headlight = s.light.x == 0.f && s.light.y == 0.f && s.light.z == 0.f;
   shading.light = shading.headlight ? Vec3f{0.f, 0.f, 1.f} : s.light;
   shading.ambient = s.ambient;

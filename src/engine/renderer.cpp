@@ -160,11 +160,11 @@ void Renderer::render(const Camera &camera, const RenderSettings &settings, Fram
   IntegratorSettings derived = s;
   derived.finestStepSigma = finestStepSigma(s.s1, s.s2, s.p);
   const CameraView view = makeCameraView(camera, settings.width, settings.height);
+  ShadingSettings shading = settings.shading;
   if (s.shade) {
     if (!gradientsBuilt_)
       buildGradients();
-    ShadingSettings &shading = derived.shading;
-    const Vec3f light = s.shading.light; // in camera space: x right, y up, z towards the eye
+    const Vec3f light = settings.shading.light; // in camera space: x right, y up, z towards the eye
     shading.light =
         normalize(normalize(view.right) * light.x + normalize(view.up) * light.y - view.forward * light.z);
     // Fully lit where the field changes by kFullyLitChange of the function's range across a mean cell.
@@ -172,7 +172,8 @@ void Renderer::render(const Camera &camera, const RenderSettings &settings, Fram
     const float meanCell = diagonal_ / std::cbrt(float(std::max<uint64_t>(mesh_->cellCount(), 1)));
     shading.fullGradientInverse = range > 0.f ? meanCell / (kFullyLitChange * range) : 0.f;
   }
-  const SampleTotals samples = backend(settings.backend).render(view, derived, target, frame.kernelMs);
+  const SampleTotals samples =
+      backend(settings.backend).render(view, derived, shading, target, frame.kernelMs);
   frame.samplesTotal = samples.total;
   frame.samplesMax = samples.max;
 }

@@ -28,6 +28,8 @@ struct RenderSettings {
   /// copies each one back to the host.
   bool keepOpacity = true;
   bool keepSamplesPerPixel = true;
+  /// How frames are lit where integrator.shade (the light in camera space).
+  ShadingSettings shading;
 };
 
 struct Frame {

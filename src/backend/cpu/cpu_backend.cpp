@@ -51,7 +51,7 @@ SceneView CpuBackend::sceneView() const {
 }
 
 SampleTotals CpuBackend::render(const CameraView &camera, const IntegratorSettings &settings,
-                                const PixelTarget &target, double &kernelMs) {
+                                const ShadingSettings &shading, const PixelTarget &target, double &kernelMs) {
   kernelMs = 0.0;
   const SceneView scene = sceneView();
   if (settings.shade && !scene.gradients)
@@ -97,11 +97,12 @@ SampleTotals CpuBackend::render(const CameraView &camera, const IntegratorSettin
                           : BoundaryCrossings{};
             // A ray that crosses no boundary face is done at once.
             const RayResult result =
-                along.none() ? RayResult{}
-                : settings.shade
-                    ? settings.preintegrate
-                          ? integrateRay<HostSampling, true, true>(scene, settings, ray, hint, along, trail)
-                          : integrateRay<HostSampling, false, true>(scene, settings, ray, hint, along, trail)
+                along.none()     ? RayResult{}
+                : settings.shade ? settings.preintegrate
+                                       ? integrateRay<HostSampling, true, true>(scene, settings, ray, hint,
+                                                                                along, trail, &shading)
+                                       : integrateRay<HostSampling, false, true>(scene, settings, ray, hint,
+                                                                                 along, trail, &shading)
                 : settings.preintegrate
                     ? integrateRay<HostSampling, true>(scene, settings, ray, hint, along, trail)
                     : integrateRay<HostSampling, false>(scene, settings, ray, hint, along, trail);

@@ -15,8 +15,8 @@ public:
   uint32_t setTransferFunction(const TransferFunction &tf) override;
   uint32_t setField(const MeshView &view) override;
   void setGradients(const Vec3f *gradients, uint64_t) override { gradients_ = gradients; }
-  SampleTotals render(const CameraView &camera, const IntegratorSettings &settings, const PixelTarget &target,
-                      double &kernelMs) override;
+  SampleTotals render(const CameraView &camera, const IntegratorSettings &settings,
+                      const ShadingSettings &shading, const PixelTarget &target, double &kernelMs) override;
   uint32_t partitionCount() const override { return accel_.partitions.count(); }
   double buildMs() const override { return buildMs_; }
   HostAcceleration acceleration() const override { return accel_; }

@@ -45,7 +45,7 @@ template <class Sampling, int BlocksPerSm, bool kPreintegrate, bool kShade>
 __global__ void __launch_bounds__(kRenderBlockThreads, BlocksPerSm)
     renderKernel(SceneView scene, IntegratorSettings settings, CameraView camera, PixelTarget target,
                  int height, const uint64_t *crossingStart, const uint64_t *crossingKeys,
-                 SampleTotals *samples) {
+                 SampleTotals *samples, ShadingSettings shading) {
   const int x = int(blockIdx.x * blockDim.x + threadIdx.x);
   const int y = int(blockIdx.y * blockDim.y + threadIdx.y);
   uint32_t taken = 0; // pixels past the frame's edge take none, and still join the warp's sums below
@@ -55,8 +55,8 @@ __global__ void __launch_bounds__(kRenderBlockThreads, BlocksPerSm)
     if (crossingStart)
       crossings =
           pixelCrossings(crossingStart, crossingKeys, uint64_t(y) * uint64_t(target.width) + uint64_t(x));
-    const RayResult result =
-        integrateRay<Sampling, kPreintegrate, kShade>(scene, settings, camera.ray(x, y), hint, crossings);
+    const RayResult result = integrateRay<Sampling, kPreintegrate, kShade>(scene, settings, camera.ray(x, y),
+                                                                           hint, crossings, {}, &shading);
     target.store(x, y, result);
     taken = result.samples;
   }
@@ -266,7 +266,8 @@ PartitionMetadata CudaBackend::metadata() const {
 }
 
 SampleTotals CudaBackend::render(const CameraView &camera, const IntegratorSettings &settings,
-                                 const PixelTarget &target, double &kernelMs) {
+                                 const ShadingSettings &shading, const PixelTarget &target,
+                                 double &kernelMs) {
   Impl &d = *impl_;
   const int height = camera.height;
   SampleTotals samples;
@@ -302,7 +303,7 @@ SampleTotals CudaBackend::render(const CameraView &camera, const IntegratorSetti
           : chooseRenderKernel<DeviceSampling>(skipping, settings.preintegrate, settings.shade);
   UVR_CUDA_CHECK(cudaEventRecord(d.renderStart));
   kernel<<<grid, block>>>(d.scene, settings, camera, device, height, crossingStart, d.crossings.keys(),
-                          d.sampleTotals.data());
+                          d.sampleTotals.data(), shading);
   UVR_CUDA_CHECK(cudaGetLastError());
   UVR_CUDA_CHECK(cudaEventRecord(d.kernelEnd));
   // The frame comes back through pinned memory, piece by piece, each copied on all cores into the caller's

@@ -45,8 +45,8 @@ public:
 
   /// Renders into `target`'s host buffers (those null are not copied back); `kernelMs`: the frame's
   /// kernels on the GPU (crossings pass and render kernel), without the copies.
-  SampleTotals render(const CameraView &camera, const IntegratorSettings &settings, const PixelTarget &target,
-                      double &kernelMs) override;
+  SampleTotals render(const CameraView &camera, const IntegratorSettings &settings,
+                      const ShadingSettings &shading, const PixelTarget &target, double &kernelMs) override;
 
   /// Device memory held: the scene alone (mesh, field, acceleration, partitions, transfer function), and all
   /// of it including the frame buffers.
