@@ -165,13 +165,13 @@ template <class Sampling, bool kPreintegrate, bool kShade = false> struct RayMar
       if constexpr (kPreintegrate) {
         pending = {value, k, last ? kEnd : kNext, true};
         if constexpr (kShade)
-          this->pendingGradient = sampler.pointVectorAt(scene.gradients, t);
+          this->pendingGradient = sampler.pointVectorAt(this->shading->gradients, t);
       } else {
         Vec4f c = scene.tf.sample(value);
         if (c.w <= 0.f)
           continue;
         if constexpr (kShade)
-          c = shade(c, sampler.pointVectorAt(scene.gradients, t));
+          c = shade(c, sampler.pointVectorAt(this->shading->gradients, t));
         compositeBehind(color, {c.x, c.y, c.z,
                                 correctedOpacity(c.w, ((last ? kEnd : kNext) - k) * spacing, settings.unit)});
       }

@@ -40,7 +40,7 @@ struct IntegratorSettings {
   /// Scale each partition's steps by its cells' size (PartitionsView::stepScale), on a grid of the finest
   /// scale's spacing, rather than one s1 for the whole mesh.
   bool followMesh = false;
-  /// Light the samples by the field's gradient (SceneView::gradients, ShadingSettings): the backends pick
+  /// Light the samples by the field's gradient as ShadingSettings says: the backends pick
   /// integrateRay<.., .., true>. Here, not at the end: the GPU's kernels copy these settings to local memory,
   /// and in the padding the unshaded kernels' copy does not grow.
   bool shade = false;

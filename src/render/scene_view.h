@@ -15,7 +15,6 @@ struct SceneView : VolumeView {
   const float *nodeMinSigma = nullptr;   ///< per KD node, see PartitionMetadata
   const float *sigma = nullptr;          ///< per partition, normalised colour deviation
   TransferFunctionView tf;
-  const Vec3f *gradients = nullptr; ///< per point, the field's gradient; set where frames are shaded
 };
 
 } // namespace uvr

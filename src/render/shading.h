@@ -14,8 +14,10 @@ namespace uvr {
 /// count), as a fraction of the transfer function's range, at and above which a sample is fully lit.
 constexpr float kFullyLitChange = 0.125f;
 
+/// How a frame is lit: a parameter of the shaded kernels alone, so that the unshaded ones are as they were.
 struct ShadingSettings {
-  bool headlight = true; ///< the light sits at the eye; else it shines from `light`
+  const Vec3f *gradients = nullptr; ///< per point, the field's gradient (on the device for CUDA)
+  bool headlight = true;            ///< the light sits at the eye; else it shines from `light`
   /// Towards the light, where not `headlight`: in camera space (x right, y up, z towards the eye) as
   /// Renderer::render takes it, in world space and of unit length as the march reads it.
   Vec3f light{0.f, 0.f, 1.f};

@@ -46,7 +46,6 @@ SceneView CpuBackend::sceneView() const {
   scene.nodeMinSigma = metadata_.nodeMinSigma.data();
   scene.sigma = metadata_.sigma.data();
   scene.tf = tf_->view();
-  scene.gradients = gradients_;
   return scene;
 }
 
@@ -54,8 +53,10 @@ SampleTotals CpuBackend::render(const CameraView &camera, const IntegratorSettin
                                 const ShadingSettings &shading, const PixelTarget &target, double &kernelMs) {
   kernelMs = 0.0;
   const SceneView scene = sceneView();
-  if (settings.shade && !scene.gradients)
+  if (settings.shade && !gradients_)
     throw Error("a shaded frame needs the field's gradients");
+  ShadingSettings lit = shading;
+  lit.gradients = gradients_;
   const std::vector<uint32_t> &boundaryFaces = accel_.boundaryFaceList;
   std::vector<uint64_t> crossingStart, crossingKeys;
   const bool crossings = skipsSpace(settings.mode) && !boundaryFaces.empty() &&
@@ -100,9 +101,9 @@ SampleTotals CpuBackend::render(const CameraView &camera, const IntegratorSettin
                 along.none()     ? RayResult{}
                 : settings.shade ? settings.preintegrate
                                        ? integrateRay<HostSampling, true, true>(scene, settings, ray, hint,
-                                                                                along, trail, &shading)
+                                                                                along, trail, &lit)
                                        : integrateRay<HostSampling, false, true>(scene, settings, ray, hint,
-                                                                                 along, trail, &shading)
+                                                                                 along, trail, &lit)
                 : settings.preintegrate
                     ? integrateRay<HostSampling, true>(scene, settings, ray, hint, along, trail)
                     : integrateRay<HostSampling, false>(scene, settings, ray, hint, along, trail);

@@ -253,12 +253,10 @@ uint32_t CudaBackend::setField(const MeshView &view) {
 
 void CudaBackend::setGradients(const Vec3f *gradients, uint64_t count) {
   Impl &d = *impl_;
-  if (gradients) {
-    d.scene.gradients = d.gradients.upload(gradients, count);
-  } else {
+  if (gradients)
+    d.gradients.upload(gradients, count);
+  else
     d.gradients.release();
-    d.scene.gradients = nullptr;
-  }
 }
 
 PartitionMetadata CudaBackend::metadata() const {
@@ -295,15 +293,17 @@ SampleTotals CudaBackend::render(const CameraView &camera, const IntegratorSetti
   if (crossings)
     d.crossings.find(d.scene.mesh, d.accel.boundaryFaceList, camera, pixels);
   const uint64_t *crossingStart = crossings ? d.crossings.start() : nullptr;
-  if (settings.shade && !d.scene.gradients)
+  if (settings.shade && d.gradients.size() == 0)
     throw Error("a shaded frame needs the field's gradients");
+  ShadingSettings lit = shading;
+  lit.gradients = d.gradients.data();
   const auto kernel =
       d.accel.cellNeighbors.size() > 0
           ? chooseRenderKernel<DeviceCellWalkSampling>(skipping, settings.preintegrate, settings.shade)
           : chooseRenderKernel<DeviceSampling>(skipping, settings.preintegrate, settings.shade);
   UVR_CUDA_CHECK(cudaEventRecord(d.renderStart));
   kernel<<<grid, block>>>(d.scene, settings, camera, device, height, crossingStart, d.crossings.keys(),
-                          d.sampleTotals.data(), shading);
+                          d.sampleTotals.data(), lit);
   UVR_CUDA_CHECK(cudaGetLastError());
   UVR_CUDA_CHECK(cudaEventRecord(d.kernelEnd));
   // The frame comes back through pinned memory, piece by piece, each copied on all cores into the caller's
