@@ -38,6 +38,11 @@ nlohmann::json frameStatsJson(const FrameStats &s) {
       {"range", {s.range.min, s.range.max}},
       {"backend", backendName(s.backend)},
       {"threads", s.threads},
+      // One process: `uvr render` under mpirun replaces these with the ranks' (docs/cli.md).
+      {"ranks", 1},
+      {"rank_render_ms", {s.renderMs}},
+      {"composite_ms", 0.0},
+      {"composite_bytes", 0},
   };
   if (s.backend == Backend::Cuda) {
     stats["device"] = s.device;

@@ -1,16 +1,21 @@
 #include "commands.h"
 #include "option_checks.h"
 
+#include "data_parallel.h"
 #include "front_end.h"
 
 #include <uvr/error.h>
 #include <uvr/io.h>
 #include <uvr/mesh.h>
+#include <uvr/renderer.h>
 
 #include <algorithm>
 #include <cctype>
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <memory>
 
 namespace uvr {
@@ -23,6 +28,7 @@ struct ConvertOptions {
   std::vector<std::string> fields;
   bool zlib = false;
   int timeStep = 0;
+  int pieces = 0; ///< for .pvtu: the pieces to write
 };
 
 /// The named fields in the order given; all of them when none is named.
@@ -73,15 +79,92 @@ VolumeMesh dropCellFields(VolumeMesh mesh, const ConvertOptions &o) {
   return std::move(mesh).withFields(kept);
 }
 
+std::string escapeXml(const std::string &text) {
+  std::string escaped;
+  for (const char c : text) {
+    switch (c) {
+    case '&':
+      escaped += "&amp;";
+      break;
+    case '<':
+      escaped += "&lt;";
+      break;
+    case '>':
+      escaped += "&gt;";
+      break;
+    case '"':
+      escaped += "&quot;";
+      break;
+    default:
+      escaped += c;
+    }
+  }
+  return escaped;
+}
+
+/// ParaView's partitioned file: OUT.pvtu naming the pieces OUT/OUT_<i>.vtu, the regions of a KD split of the
+/// mesh in the split's order (front to back along each split), each cell in the piece whose region owns it,
+/// and each piece's region in its <Piece>'s uvr_region attribute (xmin ymin zmin xmax ymax zmax).
+void writePartitioned(const VolumeMesh &mesh, const ConvertOptions &o, const SaveOptions &save) {
+  namespace fs = std::filesystem;
+  const fs::path output(o.output);
+  const std::string stem = output.stem().string();
+  const fs::path folder = output.parent_path() / stem;
+  std::error_code ec;
+  fs::create_directories(folder, ec);
+  if (ec)
+    throw Error(folder.string(), "", "cannot create the folder of the pieces: " + ec.message());
+  const MeshRegions regions = splitIntoRegions(mesh, o.pieces);
+  std::string pieces;
+  for (int i = 0; i < o.pieces; ++i) {
+    const VolumeMesh piece = ownedCells(mesh, regions.regions[size_t(i)]);
+    const std::string name = stem + "_" + std::to_string(i) + ".vtu";
+    const std::string path = (folder / name).string();
+    writeWhole(path, [&](const std::string &temporary) { piece.save(temporary, save); });
+    const Box3f &r = regions.regions[size_t(i)];
+    char region[160];
+    std::snprintf(region, sizeof region, "%.9g %.9g %.9g %.9g %.9g %.9g", double(r.lower.x),
+                  double(r.lower.y), double(r.lower.z), double(r.upper.x), double(r.upper.y),
+                  double(r.upper.z));
+    pieces += "    <Piece Source=\"" + escapeXml(stem + "/" + name) + "\" uvr_region=\"" + region + "\"/>\n";
+  }
+  std::string point, cell;
+  for (int f = 0; f < mesh.fieldCount(); ++f) {
+    const FieldInfo field = mesh.field(f);
+    (field.centering == Centering::Point ? point : cell) +=
+        "      <PDataArray type=\"Float32\" Name=\"" + escapeXml(field.name) + "\"/>\n";
+  }
+  writeWhole(o.output, [&](const std::string &temporary) {
+    std::ofstream out(temporary);
+    out << "<?xml version=\"1.0\"?>\n"
+        << "<VTKFile type=\"PUnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" "
+           "header_type=\"UInt64\">\n"
+        << "  <PUnstructuredGrid GhostLevel=\"0\">\n"
+        << "    <PPointData>\n"
+        << point << "    </PPointData>\n"
+        << "    <PCellData>\n"
+        << cell << "    </PCellData>\n"
+        << "    <PPoints>\n      <PDataArray type=\"Float32\" Name=\"Points\" NumberOfComponents=\"3\"/>\n"
+        << "    </PPoints>\n"
+        << pieces << "  </PUnstructuredGrid>\n</VTKFile>\n";
+    out.close();
+    if (!out)
+      throw Error(o.output, "", std::string("cannot write: ") + std::strerror(errno));
+  });
+}
+
 void runConvert(const ConvertOptions &o) {
   std::string extension = std::filesystem::path(o.output).extension().string();
   std::transform(extension.begin(), extension.end(), extension.begin(),
                  [](unsigned char c) { return char(std::tolower(c)); });
   const bool umesh = extension == ".umesh";
-  if (!umesh && extension != ".vtu")
-    throw Error(o.output, "", "OUT must end in .vtu or .umesh");
-  if (o.zlib && extension != ".vtu")
-    throw Error(o.output, "", "--zlib applies to .vtu output only");
+  const bool partitioned = extension == ".pvtu";
+  if (!umesh && extension != ".vtu" && !partitioned)
+    throw Error(o.output, "", "OUT must end in .vtu, .pvtu or .umesh");
+  if (partitioned != (o.pieces > 0))
+    throw Error(o.output, "", partitioned ? "a .pvtu needs --pieces N" : "--pieces writes .pvtu only");
+  if (o.zlib && umesh)
+    throw Error(o.output, "", "--zlib applies to .vtu and .pvtu output only");
   checkOutputPath(o.output, "OUT");
   LoadOptions options;
   options.timeStep = o.timeStep;
@@ -90,6 +173,14 @@ void runConvert(const ConvertOptions &o) {
     mesh = dropCellFields(std::move(mesh), o);
   SaveOptions save;
   save.compress = o.zlib;
+  if (partitioned) {
+    if (mesh.cellCount() < uint64_t(o.pieces))
+      throw Error(o.input, "", "--pieces " + std::to_string(o.pieces) + ": more pieces than cells");
+    writePartitioned(mesh, o, save);
+    std::fprintf(stderr, "uvr: wrote %s: %d pieces, %llu cells, %d fields\n", o.output.c_str(), o.pieces,
+                 static_cast<unsigned long long>(mesh.cellCount()), mesh.fieldCount());
+    return;
+  }
   writeWhole(o.output, [&](const std::string &temporary) { mesh.save(temporary, save); });
   std::fprintf(stderr, "uvr: wrote %s: %llu points, %llu cells, %d fields\n", o.output.c_str(),
                static_cast<unsigned long long>(mesh.pointCount()),
@@ -105,7 +196,8 @@ void addConvertCommand(CLI::App &app) {
                   "Mesh to read (.vtu, .vtk, .msh, .e, .ex2, .exo, .g, .umesh; a .pvd series or numbered "
                   "files such as data_%d.vtu)")
       ->required();
-  cmd->add_option("OUT", options->output, "Mesh file to write (.vtu, .umesh)")->required();
+  cmd->add_option("OUT", options->output, "Mesh file to write (.vtu, .umesh; .pvtu with --pieces)")
+      ->required();
   cmd->add_option("--field", options->fields, "Field to keep (repeat the option for several; default: all)")
       ->expected(1)
       ->allow_extra_args(false)
@@ -115,6 +207,9 @@ void addConvertCommand(CLI::App &app) {
       ->check(integerAtLeast(0))
       ->capture_default_str();
   cmd->add_flag("--zlib", options->zlib, "Compress the .vtu arrays with zlib");
+  cmd->add_option("--pieces", options->pieces,
+                  "Write a partitioned .pvtu of this many pieces, the regions of a KD split of the mesh")
+      ->check(integerAtLeast(1));
   cmd->callback([options] { runConvert(*options); });
 }
 

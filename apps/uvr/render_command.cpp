@@ -3,12 +3,17 @@
 #include "render_options.h"
 
 #include "front_end.h"
+#include "mpi_group.h"
 #include "option_checks.h"
+#ifdef UVR_HAS_MPI
+#include "data_parallel.h"
+#endif
 
 #include <uvr/color_map.h>
 #include <uvr/error.h>
 #include <uvr/image.h>
 #include <uvr/renderer.h>
+#include <uvr/system.h>
 
 #include <nlohmann/json.hpp>
 
@@ -19,6 +24,7 @@
 #include <cstring>
 #include <fstream>
 #include <memory>
+#include <optional>
 
 namespace uvr {
 
@@ -64,6 +70,11 @@ void checkOutputs(const RenderCommandOptions &o) {
     checkOutputPath(o.stats, "--stats");
 }
 
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v[v.size() / 2];
+}
+
 void runRender(const RenderCommandOptions &o) {
   FrameSettings settings = parseFrameSettings(o.view);
   if (o.frames < 1)
@@ -101,10 +112,6 @@ void runRender(const RenderCommandOptions &o) {
     times.push_back(frame.stats.renderMs);
     kernelTimes.push_back(frame.stats.gpuKernelMs);
   }
-  const auto median = [](std::vector<double> &v) {
-    std::sort(v.begin(), v.end());
-    return v[v.size() / 2];
-  };
   const double renderMs = median(times);
 
   // Statistics first: a PNG is never left behind by a failure after it.
@@ -131,6 +138,160 @@ void runRender(const RenderCommandOptions &o) {
   writeWhole(o.output, [&](const std::string &temporary) { writePng(temporary, frame.image); });
 }
 
+#ifdef UVR_HAS_MPI
+/// `uvr render` over the ranks of an MPI run: each rank draws the cells of its region of a KD split of the
+/// mesh (every rank reads the mesh whole), the ranks composite their premultiplied images in visibility
+/// order, and rank 0 applies the background and writes the outputs.
+void runRenderParallel(const RenderCommandOptions &o) {
+  MpiGroup group;
+  const bool first = group.rank() == 0;
+  FrameSettings settings;
+  ColorMap colorMap;
+  group.step([&] {
+    settings = parseFrameSettings(o.view);
+    if (o.frames < 1)
+      throw Error("--frames must be at least 1");
+    if (isMovie(o.view, o.movie))
+      throw Error("movies (a range of time steps, --orbit, --camera-path) are rendered by one process; run "
+                  "it without mpirun");
+    if (first)
+      checkOutputs(o);
+    colorMap = chooseTransferFunction(o.view);
+  });
+  std::optional<LoadedMesh> loaded;
+  group.step([&] { loaded.emplace(loadForRendering(o.view)); });
+
+  // What depends on the whole mesh comes from it: defaults, value range, camera, leaf size, the split.
+  std::optional<VolumeRenderer> renderer;
+  Camera camera;
+  MeshRegions regions;
+  uint64_t wholeCells = 0;
+  Box3f wholeBounds;
+  const double loadMs = loaded->loadMs;
+  group.step([&] {
+    const VolumeMesh &whole = loaded->mesh;
+    wholeCells = whole.cellCount();
+    wholeBounds = whole.bounds();
+    if (wholeCells < uint64_t(group.size()))
+      throw Error(whole.source(), "", "fewer cells than ranks: run fewer ranks");
+    const bool defaults =
+        !(settings.s1 > 0.f && settings.s2 > 0.f && settings.p > 0.f && settings.unit > 0.f);
+    if (defaults && !(settings.s1 > 0.f && settings.unit > 0.f) && !(whole.volumeStats().median > 0.0))
+      throw Error(whole.source(), "", "no default step: the median cell volume is 0; give --s1 and --unit");
+    if (defaults)
+      settings = withDefaultSampling(settings, whole.defaultStep(),
+                                     defaultUnitDistance(whole.bounds(), whole.cellCount()));
+    validateSettings(settings);
+    const ValueRange range = transferRange(o.view, whole, loaded->fieldIndex);
+    camera = chooseCamera(o.view, whole);
+    regions = splitIntoRegions(whole, group.size());
+    const uint32_t leafSize = o.view.leafSize != kAutoLeafSize ? o.view.leafSize : whole.defaultLeafSize();
+    const MeshPiece piece{regions.regions[size_t(group.rank())], whole.bounds(),
+                          whole.stepScaleReference(leafSize)};
+    VolumeMesh part = meshPiece(whole, loaded->fieldIndex, piece.region);
+    loaded.reset(); // the piece is all this rank keeps
+    if (settings.backend == Backend::Cuda)
+      setCudaDevice(group.localRank() % std::max(1, cudaDeviceCount()));
+    renderer.emplace(std::move(part), 0, leafSize, piece);
+    renderer->prepare(settings.backend);
+    renderer->setTransferFunction(colorMap, range);
+  });
+
+  settings.keepOpacity = false;
+  settings.keepSamplesPerPixel = !o.heatmap.empty();
+  settings.keepPremultipliedRgba = true;
+  const std::vector<int> order = regions.frontToBack(camera.eye);
+  std::vector<double> frameTimes, rankTimes, compositeTimes;
+  FrameResult frame;
+  double tfUpdateMs = 0.0;
+  uint64_t sentBytes = 0;
+  for (int i = 0; i < o.frames; ++i) {
+    group.barrier();
+    const Timer frameTimer;
+    group.step([&] { renderer->render(camera, settings, frame); });
+    if (i == 0)
+      tfUpdateMs = frame.stats.tfUpdateMs;
+    rankTimes.push_back(frame.stats.renderMs);
+    const Timer compositeTimer;
+    sentBytes = group.composite(frame.premultipliedRgba, settings.width, settings.height, order);
+    compositeTimes.push_back(compositeTimer.milliseconds());
+    frameTimes.push_back(frameTimer.milliseconds());
+  }
+
+  // Every rank takes part in the sums; rank 0 reports them.
+  FrameStats stats = frame.stats;
+  const std::vector<double> rankRenderMs = group.gather(median(rankTimes));
+  const double compositeMs = group.maxOf(median(compositeTimes));
+  const double frameMs = group.maxOf(median(frameTimes));
+  const uint64_t compositeBytes = group.sumOf(sentBytes);
+  const double slowestLoadMs = group.maxOf(loadMs);
+  stats.samplesTotal = group.sumOf(stats.samplesTotal);
+  stats.partitions = uint32_t(group.sumOf(stats.partitions));
+  stats.partitionsSkipped = uint32_t(group.sumOf(stats.partitionsSkipped));
+  stats.buildMs = group.maxOf(stats.buildMs);
+  tfUpdateMs = group.maxOf(tfUpdateMs);
+  std::vector<uint32_t> samplesPerPixel;
+  if (settings.keepSamplesPerPixel) {
+    samplesPerPixel = group.sum(frame.samplesPerPixel);
+    stats.samplesPerPixelMax = first ? *std::max_element(samplesPerPixel.begin(), samplesPerPixel.end()) : 0;
+  } else {
+    // Without the per-pixel counts, the most any rank's part of a pixel took.
+    stats.samplesPerPixelMax = uint32_t(group.maxOf(stats.samplesPerPixelMax));
+  }
+  stats.cells = wholeCells;
+  stats.samplesPerPixelMean = double(stats.samplesTotal) / (double(settings.width) * double(settings.height));
+  stats.renderMs = frameMs;
+  stats.tfUpdateMs = tfUpdateMs;
+  const int ranks = group.size();
+
+  group.step([&] {
+    if (!first)
+      return;
+    std::fprintf(stderr,
+                 "uvr: %s %dx%d, %llu cells, %d ranks, %u partitions, %.1f samples/pixel, %.1f ms/frame "
+                 "(composite %.1f ms)\n",
+                 modeName(settings.mode), settings.width, settings.height,
+                 static_cast<unsigned long long>(wholeCells), ranks, stats.partitions,
+                 stats.samplesPerPixelMean, frameMs, compositeMs);
+    if (!o.stats.empty()) {
+      nlohmann::json json = frameStatsJson(stats);
+      json["load_ms"] = slowestLoadMs;
+      json["time_step"] = o.view.timeStep;
+      json["frames"] = o.frames;
+      json["ranks"] = ranks;
+      json["rank_render_ms"] = rankRenderMs;
+      json["composite_ms"] = compositeMs;
+      json["composite_bytes"] = compositeBytes;
+      // Each rank's region within the mesh's bounds: where the split planes lie.
+      nlohmann::json boxes = nlohmann::json::array();
+      for (const Box3f &region : regions.regions) {
+        const Box3f box = {vmax(region.lower, wholeBounds.lower), vmin(region.upper, wholeBounds.upper)};
+        boxes.push_back({box.lower.x, box.lower.y, box.lower.z, box.upper.x, box.upper.y, box.upper.z});
+      }
+      json["rank_regions"] = boxes;
+      writeStats(o.stats, json);
+    }
+    if (!o.heatmap.empty()) {
+      const Image heatmap = heatmapImage(samplesPerPixel, settings.width, settings.height);
+      writeWhole(o.heatmap, [&](const std::string &temporary) { writePng(temporary, heatmap); });
+    }
+    // The background once, under the composited image, rounded as a single process's frame rounds it.
+    Image image;
+    image.width = settings.width;
+    image.height = settings.height;
+    image.rgb.resize(3 * size_t(settings.width) * size_t(settings.height));
+    const std::vector<float> &rgba = frame.premultipliedRgba;
+    const auto toByte = [](float v) { return uint8_t(std::clamp(v, 0.f, 1.f) * 255.f + 0.5f); };
+    for (size_t p = 0; p < image.rgb.size() / 3; ++p) {
+      const float through = 1.f - rgba[4 * p + 3];
+      for (int c = 0; c < 3; ++c)
+        image.rgb[3 * p + size_t(c)] = toByte(rgba[4 * p + size_t(c)] + through * settings.background[c]);
+    }
+    writeWhole(o.output, [&](const std::string &temporary) { writePng(temporary, image); });
+  });
+}
+#endif
+
 } // namespace
 
 void addRenderCommand(CLI::App &app) {
@@ -148,7 +309,13 @@ void addRenderCommand(CLI::App &app) {
   cmd->add_option("--stats", o.stats, "Write statistics as JSON");
   cmd->callback([options, cmd] {
     options->framesGiven = cmd->count("--frames") > 0;
-    runRender(*options);
+    if (!startedByMpiLauncher())
+      return runRender(*options);
+#ifdef UVR_HAS_MPI
+    runRenderParallel(*options);
+#else
+    throw Error("started by an MPI launcher, but this uvr was built without MPI (UVR_MPI); run it alone");
+#endif
   });
 }
 

@@ -1,8 +1,8 @@
 // What a mesh file load or save may choose beyond the file (see VolumeMesh::load and VolumeMesh::save).
 //
-// Read: VTK XML .vtu, legacy .vtk, Gmsh .msh (2.2, 4.1), Exodus II (.e, .ex2, .exo, .g; when built with
-// netCDF), umesh .umesh; and time series: a ParaView .pvd collection or numbered files (data_%d.vtu,
-// data_%04d.vtu, data_*.vtu). Written: .vtu and .umesh.
+// Read: VTK XML .vtu, ParaView's partitioned .pvtu (the union of its pieces), legacy .vtk, Gmsh .msh (2.2,
+// 4.1), Exodus II (.e, .ex2, .exo, .g; when built with netCDF), umesh .umesh; and time series: a ParaView
+// .pvd collection or numbered files (data_%d.vtu, data_%04d.vtu, data_*.vtu). Written: .vtu and .umesh.
 #pragma once
 
 #include <string>

@@ -143,6 +143,14 @@ public:
   /// The default step s1: the edge of a cube of the median cell volume, about half a typical tet's edge, so
   /// that a ray takes about two samples per cell it crosses.
   float defaultStep() const;
+  /// What the partitions a renderer makes with `leafSize` (kAutoLeafSize: the default) scale steps that
+  /// follow the mesh against: the mean size of their cells (log2 of the volume of a cell's box, in 1/256ths,
+  /// over the partitions' cells), and the least of their step scales. Builds them.
+  struct StepScaleReference {
+    double meanCellSizeLog2 = 0.0;
+    float finestStepScale = 1.f;
+  };
+  StepScaleReference stepScaleReference(uint32_t leafSize = kAutoLeafSize) const;
   /// The most cells per partition that kAutoLeafSize stands for.
   uint32_t defaultLeafSize() const;
   /// The partitions a renderer makes of this mesh with `leafSize` (kAutoLeafSize: the default); builds them.

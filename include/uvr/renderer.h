@@ -52,6 +52,9 @@ struct FrameResult {
   Image image;                           ///< RGB composited over the background, top row first
   std::vector<float> opacity;            ///< accumulated opacity per pixel, row-major; empty unless kept
   std::vector<uint32_t> samplesPerPixel; ///< row-major; empty unless kept
+  /// Premultiplied red, green, blue and opacity per pixel, before the background, row-major, top row first;
+  /// empty unless FrameSettings::keepPremultipliedRgba.
+  std::vector<float> premultipliedRgba;
   FrameStats stats;
 };
 
@@ -59,6 +62,43 @@ struct FrameResult {
 /// constant field (min == max, or no finite values: {0, 0}) one of width max(1, |value| / 1000) centred on
 /// the value, so that the field shows in the preset's middle colour rather than at its transparent end.
 ValueRange defaultTransferRange(ValueRange fieldRange);
+
+/// What a renderer of one piece of a mesh split among processes (data-parallel rendering) takes from the
+/// whole mesh, so that its frames sample as the whole mesh's frames do and the pieces' frames composite to
+/// the whole mesh's.
+struct MeshPiece {
+  /// The region of space this piece draws (one of splitIntoRegions' for the whole mesh): rays are clipped to
+  /// it. The piece holds every cell whose box touches it.
+  Box3f region;
+  /// The whole mesh's bounds: rays' sample grids start where they enter them.
+  Box3f wholeBounds;
+  /// VolumeMesh::stepScaleReference of the whole mesh, for its leaf size: steps that follow the mesh scale
+  /// against its mean cell size, on a sample grid of its finest step scale.
+  VolumeMesh::StepScaleReference wholeStepScales;
+};
+
+/// The regions of space that the pieces of a mesh split among processes draw: the top levels of the KD-tree
+/// of the mesh's partitions (for a power of 2, its very median splits, so that each piece's partitions are
+/// the whole mesh's within its region), and the order they composite in.
+struct MeshRegions {
+  struct Node {
+    int axis = -1; ///< -1 for a region
+    float position = 0.f;
+    int below = -1, above = -1; ///< children: the sides axis < position and axis >= position
+    int region = -1;            ///< for a region, its index
+  };
+  std::vector<Node> nodes; ///< the root first
+  std::vector<Box3f> regions;
+
+  /// The regions front to back as seen from `eye`: at each split, the eye's side first, since no ray from
+  /// the eye crosses the plane back towards it.
+  std::vector<int> frontToBack(Vec3f eye) const;
+};
+
+/// Splits the space around `mesh` into `count` regions (at least 1) of about as many cells each; the outer
+/// faces of the outer regions lie just past the mesh's bounds. A region is empty where there are more regions
+/// than cells.
+MeshRegions splitIntoRegions(const VolumeMesh &mesh, int count);
 
 /// Renders one field of a mesh. Built lazily, per backend, where it is first needed (prepare): tet
 /// adjacency, point-location hierarchy, occupancy and seed grids, and the partitions whose per-partition
@@ -70,6 +110,8 @@ public:
   /// Renders field `fieldIndex` of `mesh` (see VolumeMesh::chooseField) in partitions of at most `leafSize`
   /// cells. Keeps the mesh.
   VolumeRenderer(VolumeMesh mesh, int fieldIndex, uint32_t leafSize = kAutoLeafSize);
+  /// Renders `mesh` as `piece` of a larger mesh (see MeshPiece); pass the whole mesh's leaf size.
+  VolumeRenderer(VolumeMesh mesh, int fieldIndex, uint32_t leafSize, const MeshPiece &piece);
   ~VolumeRenderer();
   VolumeRenderer(VolumeRenderer &&) noexcept;
   VolumeRenderer &operator=(VolumeRenderer &&) noexcept;

@@ -80,6 +80,9 @@ struct FrameSettings {
   Backend backend = Backend::Cpu;
   bool keepOpacity = true;         ///< return the accumulated opacity per pixel
   bool keepSamplesPerPixel = true; ///< return the samples taken per pixel
+  /// Return the premultiplied colour and opacity per pixel as floats, before the background: what frames of
+  /// several pieces of a mesh are composited from.
+  bool keepPremultipliedRgba = false;
   /// Light each sample by the field's gradient (Blinn-Phong, two-sided), blended with the unlit colour by
   /// the gradient's magnitude so that near-uniform regions stay unlit (docs/design.md, "Shading"). The
   /// gradient per point (12 bytes a point) is computed on the host by the first shaded frame.

@@ -10,6 +10,12 @@ namespace uvr {
 /// The threads the library's parallel loops use (all cores unless the process limits them).
 int threadCount();
 
+/// The CUDA GPUs this process sees: 0 without the CUDA backend or a GPU.
+int cudaDeviceCount();
+/// Makes the CUDA backends prepared from now on run on GPU `ordinal` (GPU 0 by default, and where `ordinal`
+/// is not below cudaDeviceCount()): one process per GPU picks its own. Throws uvr::Error for a negative one.
+void setCudaDevice(int ordinal);
+
 /// The memory limit in bytes: what the library lets input inflate to (decompressed arrays, values a file
 /// declares but does not hold, frame buffers) before refusing it with uvr::Error. The default is 4 GiB, or
 /// the environment variable UVR_MEMORY_LIMIT (bytes, or with a K, M, G or T suffix) when set.

@@ -8,6 +8,7 @@
 #include "mesh/cell.h"
 #include "mesh/mesh_view.h"
 
+#include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <span>
@@ -71,8 +72,24 @@ template <typename Storage> struct PartitionArrays {
 };
 using Partitions = PartitionArrays<HostStorage>;
 
-/// Median-split KD-tree over cell centroids until a leaf holds at most `leafSize` cells.
-Partitions buildPartitions(const MeshView &mesh, uint32_t leafSize);
+/// Median-split KD-tree over cell centroids until a leaf holds at most `leafSize` cells. `stepScaleMean`,
+/// where given, takes the mean cellSizeLog2 the step scales compare with (StepScales::mean).
+Partitions buildPartitions(const MeshView &mesh, uint32_t leafSize, double *stepScaleMean = nullptr);
+
+/// The top levels of the tree buildPartitions makes of `mesh`, down to `count` regions (for a power of 2, the
+/// same median splits; otherwise split in proportion to the regions on each side), for the pieces of a mesh
+/// split among processes: inner nodes first as the tree lays them out, and each region's box.
+struct RegionSplit {
+  struct Node {
+    int axis = -1; ///< -1 for a region
+    float position = 0.f;
+    int below = -1, above = -1; ///< children: axis < position, axis >= position
+    int region = -1;
+  };
+  std::vector<Node> nodes; ///< the root first
+  std::vector<Box3f> regions;
+};
+RegionSplit splitRegions(const MeshView &mesh, int count);
 
 /// The scalar range of the cells each of the `count` partitions of the tree `nodes` lists, for `mesh`'s
 /// field: what buildPartitions computed, again for new values on the same cells (the tree, boxes and step
@@ -132,14 +149,17 @@ UVR_HOST_DEVICE inline int32_t cellSizeLog2(const Box3f &box) {
 struct StepScales {
   std::vector<float> partition, node; ///< PartitionArrays::stepScale and nodeMaxStepScale
   float finest = 1.f;
+  double mean = 0.0; ///< the mesh's mean cellSizeLog2 the scales compare with
 };
 
 /// The partitions' step scales from the sums of cellSizeLog2 over each partition's `cellCounts` cells: the
 /// ratio of the geometric mean cell size in a partition to the mesh's, rounded to a power of two from 1/8 to
 /// 8 (a partition whose cells are within a factor of 1.41 of the mesh's keeps steps of s1). On the host for
-/// both builds, in integers to the rounding: both scale alike.
+/// both builds, in integers to the rounding: both scale alike. `reference`: the mesh's mean cellSizeLog2
+/// (MeshView::stepScaleReference), or NaN to take it from the sums.
 StepScales computeStepScales(const std::vector<int64_t> &sizeLog2Sums,
-                             const std::vector<uint64_t> &cellCounts, const std::vector<KdNode> &nodes);
+                             const std::vector<uint64_t> &cellCounts, const std::vector<KdNode> &nodes,
+                             double reference = NAN);
 
 /// The scalar range a cell contributes to its partitions: empty where it holds only NaN, [0, 0] for geometry
 /// alone (no field).

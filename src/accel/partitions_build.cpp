@@ -177,21 +177,23 @@ private:
 } // namespace
 
 StepScales computeStepScales(const std::vector<int64_t> &sizeLog2Sums,
-                             const std::vector<uint64_t> &cellCounts, const std::vector<KdNode> &nodes) {
+                             const std::vector<uint64_t> &cellCounts, const std::vector<KdNode> &nodes,
+                             double reference) {
   int64_t sum = 0;
   uint64_t count = 0;
   for (size_t i = 0; i < cellCounts.size(); ++i) {
     sum += sizeLog2Sums[i];
     count += cellCounts[i];
   }
+  const double mean = std::isnan(reference) ? double(sum) / double(count) : reference;
   StepScales scales;
+  scales.mean = mean;
   scales.partition.assign(cellCounts.size(), 1.f);
   for (size_t i = 0; i < cellCounts.size() && count > 0; ++i) {
     if (cellCounts[i] == 0)
       continue;
     // Volumes in 1/256ths of log2: a length ratio of 2 is 3 * 256 apart.
-    const double ratio =
-        (double(sizeLog2Sums[i]) / double(cellCounts[i]) - double(sum) / double(count)) / 768.0;
+    const double ratio = (double(sizeLog2Sums[i]) / double(cellCounts[i]) - mean) / 768.0;
     scales.partition[i] = std::ldexp(1.f, int(std::clamp(std::lround(ratio), -3l, 3l)));
   }
   scales.node.assign(nodes.size(), 1.f);
@@ -236,7 +238,56 @@ void computePartitionValueRanges(const MeshView &mesh, std::span<const KdNode> n
   });
 }
 
-Partitions buildPartitions(const MeshView &mesh, uint32_t leafSize) {
+namespace {
+
+/// Whether `p` lies in `box`, taken half-open as the split assigns centroids: lower <= p < upper.
+bool holdsCentroid(const Box3f &box, Vec3f p) {
+  return box.lower.x <= p.x && p.x < box.upper.x && box.lower.y <= p.y && p.y < box.upper.y &&
+         box.lower.z <= p.z && p.z < box.upper.z;
+}
+
+int splitRegion(RegionSplit &split, const Box3f &box, Centroid *first, Centroid *last, int firstRegion,
+                int count) {
+  const int index = int(split.nodes.size());
+  split.nodes.emplace_back();
+  const size_t cells = size_t(last - first);
+  if (count == 1 || cells < 2) {
+    split.nodes[size_t(index)].region = firstRegion;
+    split.regions[size_t(firstRegion)] = box;
+    return index; // more regions than cells: the others stay empty
+  }
+  // TreeBuilder::split's choice: the axis the centroids spread most along, the median by position and index.
+  const int axis = widestAxis(parallelBounds(cells, [&](uint64_t i) { return first[i].p; }).size());
+  const int below = count / 2;
+  Centroid *middle = first + cells * size_t(below) / size_t(count);
+  selectMedian(first, middle, last, axis);
+  const float position = middle->p[axis];
+  Box3f lower = box, upper = box;
+  lower.upper[axis] = position;
+  upper.lower[axis] = position;
+  const int belowNode = splitRegion(split, lower, first, middle, firstRegion, below);
+  const int aboveNode = splitRegion(split, upper, middle, last, firstRegion + below, count - below);
+  split.nodes[size_t(index)] = {axis, position, belowNode, aboveNode, -1};
+  return index;
+}
+
+} // namespace
+
+RegionSplit splitRegions(const MeshView &mesh, int count) {
+  const uint64_t cellCount = mesh.cellCount();
+  std::vector<Centroid> centroids(cellCount);
+  tbb::parallel_for(uint64_t(0), cellCount, [&](uint64_t c) {
+    centroids[c] = {partitionCentroid(cellBounds(mesh, c)), uint32_t(c)};
+  });
+  const Box3f meshBounds = parallelBounds(cellCount, [&](uint64_t c) { return cellBounds(mesh, c); });
+  RegionSplit split;
+  split.regions.assign(size_t(std::max(count, 1)), Box3f{});
+  splitRegion(split, padded(meshBounds, partitionPadding(meshBounds)), centroids.data(),
+              centroids.data() + cellCount, 0, std::max(count, 1));
+  return split;
+}
+
+Partitions buildPartitions(const MeshView &mesh, uint32_t leafSize, double *stepScaleMean) {
   const uint64_t cellCount = mesh.cellCount();
   if (cellCount == 0)
     throw Error("the mesh has no volume cells");
@@ -256,8 +307,12 @@ Partitions buildPartitions(const MeshView &mesh, uint32_t leafSize) {
                     });
 
   const Box3f meshBounds = parallelBounds(cellCount, [&](uint64_t c) { return cells[c].bounds; });
-  const float pad = partitionPadding(meshBounds);
+  const bool piece = !mesh.pieceRegion.empty();
+  const float pad = partitionPadding(piece ? mesh.pieceWholeBounds : meshBounds);
   const Box3f root = padded(meshBounds, pad);
+  // A piece's tree starts from its region's box, as the whole mesh's tree reaches it; its cells may reach
+  // past the region, and the root bounds hold them all.
+  const Box3f treeRoot = piece ? intersection(mesh.pieceRegion, padded(mesh.pieceWholeBounds, pad)) : root;
 
   Partitions parts;
   parts.rootBounds = root;
@@ -266,7 +321,13 @@ Partitions buildPartitions(const MeshView &mesh, uint32_t leafSize) {
     tbb::parallel_for(uint64_t(0), cellCount, [&](uint64_t c) {
       centroids[c] = {partitionCentroid(cells[c].bounds), uint32_t(c)};
     });
-    Subtree tree = TreeBuilder(leafSize).build(root, centroids.data(), centroids.data() + cellCount);
+    // A piece's tree is the whole mesh's below its region: over the cells the whole tree puts there.
+    if (piece)
+      centroids.erase(std::remove_if(centroids.begin(), centroids.end(),
+                                     [&](const Centroid &c) { return !holdsCentroid(treeRoot, c.p); }),
+                      centroids.end());
+    Subtree tree =
+        TreeBuilder(leafSize).build(treeRoot, centroids.data(), centroids.data() + centroids.size());
     parts.nodes = std::move(tree.nodes);
     parts.bounds = std::move(tree.leafBounds);
   }
@@ -299,10 +360,12 @@ Partitions buildPartitions(const MeshView &mesh, uint32_t leafSize) {
     parts.cellCounts[i] = leaf.count;
     sizeLog2Sums[i] = leaf.sizeLog2Sum;
   });
-  StepScales scales = computeStepScales(sizeLog2Sums, parts.cellCounts, parts.nodes);
+  StepScales scales = computeStepScales(sizeLog2Sums, parts.cellCounts, parts.nodes, mesh.stepScaleReference);
   parts.stepScale = std::move(scales.partition);
   parts.nodeMaxStepScale = std::move(scales.node);
   parts.finestStepScale = scales.finest;
+  if (stepScaleMean)
+    *stepScaleMean = scales.mean;
   // Children follow their parents in `nodes`, so one backward pass gathers each subtree's box.
   parts.nodeBounds.assign(parts.nodes.size(), Box3f{});
   for (size_t node = parts.nodes.size(); node-- > 0;) {

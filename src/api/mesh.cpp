@@ -3,6 +3,7 @@
 #include "io/mesh_io.h"
 #include "mesh/mesh_stats.h"
 #include <uvr/error.h>
+#include <uvr/renderer.h>
 
 #include <algorithm>
 #include <cmath>
@@ -213,6 +214,45 @@ VolumeStats VolumeMesh::volumeStats() const {
 }
 
 float VolumeMesh::defaultStep() const { return defaultStepSize(volumeStats(), bounds()); }
+
+MeshRegions splitIntoRegions(const VolumeMesh &mesh, int count) {
+  const RegionSplit split = splitRegions(makeMeshView(detail::Access::mesh(mesh), -1), count);
+  MeshRegions regions;
+  regions.regions = split.regions;
+  for (const RegionSplit::Node &n : split.nodes)
+    regions.nodes.push_back({n.axis, n.position, n.below, n.above, n.region});
+  return regions;
+}
+
+namespace {
+void appendFrontToBack(const MeshRegions &regions, int node, Vec3f eye, std::vector<int> &order) {
+  const MeshRegions::Node &n = regions.nodes[size_t(node)];
+  if (n.axis < 0) {
+    order.push_back(n.region);
+    return;
+  }
+  const bool eyeBelow = eye[n.axis] < n.position;
+  appendFrontToBack(regions, eyeBelow ? n.below : n.above, eye, order);
+  appendFrontToBack(regions, eyeBelow ? n.above : n.below, eye, order);
+}
+} // namespace
+
+std::vector<int> MeshRegions::frontToBack(Vec3f eye) const {
+  std::vector<int> order;
+  if (!nodes.empty())
+    appendFrontToBack(*this, 0, eye, order);
+  return order;
+}
+
+VolumeMesh::StepScaleReference VolumeMesh::stepScaleReference(uint32_t leafSize) const {
+  if (cellCount() == 0)
+    return {};
+  const uint32_t size = leafSize != kAutoLeafSize ? leafSize : defaultLeafSize();
+  StepScaleReference reference;
+  reference.finestStepScale =
+      buildPartitions(makeMeshView(impl_->mesh, -1), size, &reference.meanCellSizeLog2).finestStepScale;
+  return reference;
+}
 
 uint32_t VolumeMesh::defaultLeafSize() const { return uvr::defaultLeafSize(cellCount()); }
 

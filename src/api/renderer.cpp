@@ -91,6 +91,11 @@ struct VolumeRenderer::Impl {
 
   Impl(VolumeMesh handle, int field, uint32_t leafSize)
       : mesh(std::move(handle)), fieldIndex(field), renderer(detail::Access::mesh(mesh), field, leafSize) {}
+  Impl(VolumeMesh handle, int field, uint32_t leafSize, const MeshPiece &piece)
+      : Impl(std::move(handle), field, leafSize) {
+    renderer.setPiece(piece.region, piece.wholeBounds, piece.wholeStepScales.meanCellSizeLog2,
+                      piece.wholeStepScales.finestStepScale);
+  }
 };
 
 VolumeRenderer::VolumeRenderer(VolumeMesh mesh, int fieldIndex, uint32_t leafSize)
@@ -101,6 +106,9 @@ VolumeRenderer::VolumeRenderer(VolumeMesh mesh, int fieldIndex, uint32_t leafSiz
   if (m.cellCount() > 0 && b.lower.x == b.upper.x && b.lower.y == b.upper.y && b.lower.z == b.upper.z)
     throw Error(m.source(), "", "the mesh has zero extent: all its points coincide");
 }
+
+VolumeRenderer::VolumeRenderer(VolumeMesh mesh, int fieldIndex, uint32_t leafSize, const MeshPiece &piece)
+    : impl_(std::make_unique<Impl>(std::move(mesh), fieldIndex, leafSize, piece)) {}
 
 VolumeRenderer::~VolumeRenderer() = default;
 VolumeRenderer::VolumeRenderer(VolumeRenderer &&) noexcept = default;
@@ -164,7 +172,9 @@ FrameResult VolumeRenderer::render(const Camera &camera, const FrameSettings &se
 void VolumeRenderer::render(const Camera &camera, const FrameSettings &settings, FrameResult &result) {
   validateCamera(camera);
   validateSettings(settings);
-  checkMemoryLimit("", "", uint64_t(settings.width) * uint64_t(settings.height) * kFrameBytesPerPixel,
+  checkMemoryLimit("", "",
+                   uint64_t(settings.width) * uint64_t(settings.height) *
+                       (kFrameBytesPerPixel + (settings.keepPremultipliedRgba ? 4 * sizeof(float) : 0)),
                    "a " + std::to_string(settings.width) + "x" + std::to_string(settings.height) + " frame");
   // The mesh's default step costs a pass over its cells, once: only where a setting asks for it.
   const bool defaults = !(settings.s1 > 0.f && settings.s2 > 0.f && settings.p > 0.f && settings.unit > 0.f);
@@ -203,11 +213,13 @@ void VolumeRenderer::render(const Camera &camera, const FrameSettings &settings,
   internal.backend = s.backend;
   internal.keepOpacity = s.keepOpacity;
   internal.keepSamplesPerPixel = s.keepSamplesPerPixel;
+  internal.keepPremultipliedRgba = s.keepPremultipliedRgba;
 
   Frame frame; // the result's buffers, to be reused
   frame.image = std::move(result.image);
   frame.opacity = std::move(result.opacity);
   frame.samplesPerPixel = std::move(result.samplesPerPixel);
+  frame.premultipliedRgba = std::move(result.premultipliedRgba);
   Renderer &renderer = impl_->renderer;
   const Timer timer;
   renderer.render(camera, internal, frame);
@@ -215,6 +227,7 @@ void VolumeRenderer::render(const Camera &camera, const FrameSettings &settings,
   result.image = std::move(frame.image);
   result.opacity = std::move(frame.opacity);
   result.samplesPerPixel = std::move(frame.samplesPerPixel);
+  result.premultipliedRgba = std::move(frame.premultipliedRgba);
 
   FrameStats &stats = result.stats;
   stats = FrameStats{};

@@ -1,4 +1,7 @@
 #include <uvr/error.h>
+#ifdef UVR_HAVE_CUDA
+#include "backend/cuda/cuda_backend.h"
+#endif
 
 #include <uvr/settings.h>
 #include <uvr/system.h>
@@ -134,5 +137,21 @@ void validateSettings(const FrameSettings &s) {
 }
 
 int threadCount() { return tbb::info::default_concurrency(); }
+
+int cudaDeviceCount() {
+#ifdef UVR_HAVE_CUDA
+  return cudaDevicesVisible();
+#else
+  return 0;
+#endif
+}
+
+void setCudaDevice(int ordinal) {
+  if (ordinal < 0)
+    throw Error("a CUDA device ordinal must not be negative; got " + std::to_string(ordinal));
+#ifdef UVR_HAVE_CUDA
+  selectCudaDevice(ordinal);
+#endif
+}
 
 } // namespace uvr

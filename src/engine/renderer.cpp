@@ -31,6 +31,23 @@ Renderer::Renderer(const Mesh &mesh, int fieldIndex, uint32_t leafSize) : mesh_(
 
 Renderer::~Renderer() = default;
 
+void Renderer::setPiece(const Box3f &region, const Box3f &wholeBounds, double meanCellSizeLog2,
+                        float finestStepScale) {
+  if (prepared(Backend::Cpu) || prepared(Backend::Cuda))
+    throw Error("a renderer's piece is set before its backends are prepared");
+  if (region.empty() || wholeBounds.empty())
+    throw Error("a piece of a mesh needs a region and the whole mesh's bounds");
+  region_ = region;
+  // As the partitions pad the root of a whole mesh's tree, where its rays' sample grids begin.
+  gridBounds_ = padded(wholeBounds, partitionPadding(wholeBounds));
+  diagonal_ = length(wholeBounds.upper - wholeBounds.lower);
+  center_ = wholeBounds.center();
+  meshView_.stepScaleReference = meanCellSizeLog2;
+  wholeFinestStepScale_ = finestStepScale;
+  meshView_.pieceRegion = region;
+  meshView_.pieceWholeBounds = wholeBounds;
+}
+
 void Renderer::setTransferFunction(TransferFunction tf) {
   const Timer timer;
   tf_.emplace(std::move(tf));
@@ -151,14 +168,19 @@ void Renderer::render(const Camera &camera, const RenderSettings &settings, Fram
   frame.image.rgb.resize(3 * pixels);
   frame.opacity.resize(settings.keepOpacity ? pixels : 0);
   frame.samplesPerPixel.resize(settings.keepSamplesPerPixel ? pixels : 0);
+  frame.premultipliedRgba.resize(settings.keepPremultipliedRgba ? 4 * pixels : 0);
   PixelTarget target;
   target.rgb = frame.image.rgb.data();
   target.opacity = settings.keepOpacity ? frame.opacity.data() : nullptr;
   target.samples = settings.keepSamplesPerPixel ? frame.samplesPerPixel.data() : nullptr;
+  target.rgba = settings.keepPremultipliedRgba ? frame.premultipliedRgba.data() : nullptr;
   target.width = settings.width;
   target.background = settings.background;
   IntegratorSettings derived = s;
   derived.finestStepSigma = finestStepSigma(s.s1, s.s2, s.p);
+  derived.clip = region_;
+  derived.gridBounds = gridBounds_;
+  derived.finestStepScale = wholeFinestStepScale_;
   const CameraView view = makeCameraView(camera, settings.width, settings.height);
   ShadingSettings shading = settings.shading;
   if (s.shade) {

@@ -28,6 +28,7 @@ struct RenderSettings {
   /// copies each one back to the host.
   bool keepOpacity = true;
   bool keepSamplesPerPixel = true;
+  bool keepPremultipliedRgba = false;
   /// How frames are lit where integrator.shade (the light in camera space).
   ShadingSettings shading;
 };
@@ -36,6 +37,7 @@ struct Frame {
   Image image;
   std::vector<float> opacity; ///< accumulated opacity per pixel, row-major, top row first; or empty
   std::vector<uint32_t> samplesPerPixel; ///< row-major, top row first; or empty
+  std::vector<float> premultipliedRgba;  ///< 4 per pixel, before the background, row-major; or empty
   uint64_t samplesTotal = 0;
   uint32_t samplesMax = 0;
   double kernelMs = 0.0; ///< the GPU time of the frame's kernels (CUDA), without copies; 0 on the CPU
@@ -51,6 +53,13 @@ public:
   /// `leafSize` cells (kAutoLeafSize: defaultLeafSize). Nothing is built until a backend is prepared.
   Renderer(const Mesh &mesh, int fieldIndex, uint32_t leafSize = kAutoLeafSize);
   ~Renderer();
+
+  /// Renders the mesh as one piece of a larger one, before any backend is prepared: rays are clipped to
+  /// `region` and sample on the grid of the whole mesh's bounds `wholeBounds`, the partitions are the whole
+  /// mesh's within the region (on the host's build) and scale their steps against the whole mesh's mean cell
+  /// size `meanCellSizeLog2`, on a grid of its finest step scale `finestStepScale` (see uvr::MeshPiece).
+  void setPiece(const Box3f &region, const Box3f &wholeBounds, double meanCellSizeLog2,
+                float finestStepScale);
 
   /// Replaces the transfer function and recomputes the partitions' metadata on every backend prepared; a
   /// backend prepared later takes it then. The mesh is not touched.
@@ -74,6 +83,7 @@ public:
   /// Whether `backend` has been prepared. The reads below that name a backend throw uvr::Error where not.
   bool prepared(Backend backend) const;
   uint32_t partitionCount(Backend backend) const;
+
   /// Milliseconds the acceleration build for `backend` took (on the GPU for CUDA, the mesh's upload
   /// excluded).
   double buildMs(Backend backend) const;
@@ -111,8 +121,10 @@ private:
 
   const Mesh *mesh_;
   MeshView meshView_;
-  float diagonal_ = 0.f; ///< of the mesh bounds
-  Vec3f center_;         ///< of the mesh bounds
+  float diagonal_ = 0.f;      ///< of the mesh bounds
+  Vec3f center_;              ///< of the mesh bounds
+  Box3f region_, gridBounds_; ///< a piece's (setPiece); empty for a whole mesh
+  float wholeFinestStepScale_ = 0.f;
   uint32_t leafSize_;
   std::optional<TransferFunction> tf_;
   uint32_t transparentPartitions_ = 0;

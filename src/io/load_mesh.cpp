@@ -83,6 +83,33 @@ Series readPvd(const std::string &path) {
   return series;
 }
 
+/// The pieces a ParaView partitioned file (.pvtu) names, in its order.
+std::vector<std::string> readPvtu(const std::string &path) {
+  FileBuffer file = readFile(path);
+  pugi::xml_document doc;
+  const pugi::xml_parse_result result = doc.load_buffer_inplace(file.data.data(), file.size);
+  if (!result)
+    throw Error(path, "byte " + std::to_string(std::max<ptrdiff_t>(result.offset, 0)),
+                std::string("malformed XML: ") + result.description());
+  const pugi::xml_node grid = doc.child("VTKFile").child("PUnstructuredGrid");
+  if (std::string_view(doc.child("VTKFile").attribute("type").value()) != "PUnstructuredGrid" || !grid)
+    throw Error(path, "", "expected <VTKFile type=\"PUnstructuredGrid\"> with a <PUnstructuredGrid>");
+  std::vector<std::string> pieces;
+  const fs::path directory = fs::path(path).parent_path();
+  for (pugi::xml_node node : grid.children("Piece")) {
+    const std::string source = node.attribute("Source").value();
+    const std::string position = "byte " + std::to_string(node.offset_debug());
+    if (source.empty())
+      throw Error(path, position, "<Piece> without a Source attribute");
+    if (lowerCaseExtension(source) != ".vtu")
+      throw Error(path, position, "<Piece> names '" + quoteInput(source) + "': expected a .vtu file");
+    pieces.push_back(fs::path(source).is_absolute() ? source : (directory / source).string());
+  }
+  if (pieces.empty())
+    throw Error(path, "", "the file lists no <Piece>");
+  return pieces;
+}
+
 /// Compares names by their text, and embedded numbers by value: data_2 before data_10.
 bool naturalLess(const std::string &a, const std::string &b) {
   size_t i = 0, j = 0;
@@ -210,6 +237,13 @@ Mesh loadSingle(const std::string &path, const LoadOptions &options);
 } // namespace
 
 Mesh loadMesh(const std::string &path, const LoadOptions &options) {
+  if (lowerCaseExtension(path) == ".pvtu") {
+    if (options.timeStep != 0)
+      throw Error(path, "", "time step " + std::to_string(options.timeStep) + " asked, the file has 1");
+    // The union of the pieces, as one mesh.
+    const std::vector<std::string> pieces = readPvtu(path);
+    return pieces.size() == 1 ? loadSingle(pieces[0], {}) : buildMesh(mergeParts(pieces, path), path);
+  }
   const Series series = seriesOf(path);
   if (!series.empty()) {
     if (options.timeStep < 0 || size_t(options.timeStep) >= series.size())

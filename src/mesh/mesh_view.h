@@ -5,6 +5,7 @@
 #include "core/vec.h"
 #include "mesh/mesh.h"
 
+#include <cmath>
 #include <cstdint>
 
 namespace uvr {
@@ -21,6 +22,13 @@ struct MeshView {
   uint64_t hexCount = 0;
   const float *values = nullptr; ///< the rendered field, per point or per cell
   bool cellCentered = false;
+  /// The mean cellSizeLog2 that partitions' step scales compare theirs with: NaN for this mesh's own, the
+  /// whole mesh's for a piece of one (MeshPiece).
+  double stepScaleReference = NAN;
+  /// For a piece of a mesh: its region and the whole mesh's bounds (empty for a whole mesh). Its partitions
+  /// are then the whole mesh's within the region: the tree is built over the cells whose centroids lie in
+  /// it, from the region's box down, padded as the whole mesh's.
+  Box3f pieceRegion, pieceWholeBounds;
 
   UVR_HOST_DEVICE uint64_t cellCount() const { return tetCount + pyramidCount + wedgeCount + hexCount; }
 };

@@ -233,12 +233,13 @@ UVR_HOST_DEVICE inline RayResult integrateRay(const SceneView &scene, const Inte
   if (intervals.entryTet() != kNoCell)
     sampler.enter(intervals.entryTet());
   // The next ray's grid starts where it enters the mesh bounds, as this one's does.
-  sampler.follow(trail, scene.partitions.rootBounds, intervals.grid().spacing);
+  sampler.follow(trail, settings.clip.empty() ? scene.partitions.rootBounds : settings.gridBounds,
+                 intervals.grid().spacing);
   RayMarch<Sampling, kPreintegrate, kShade> march(scene, settings, intervals, sampler, hint, shading);
   // Here rather than in forEach: with both calls to the march inside it, the GPU's kernel spilled more.
   if (settings.mode == RenderMode::Reference) {
     // The paper's reference ray marcher: the mesh bounds in one interval, at step s1.
-    march.interval(intervals.grid().origin, intervals.boundsExit(), intervals.grid().spacing);
+    march.interval(intervals.boundsEnter(), intervals.boundsExit(), intervals.grid().spacing);
   } else {
     intervals.forEach([&](float t0, float t1, float step) { return march.interval(t0, t1, step); });
   }

@@ -48,6 +48,13 @@ struct IntegratorSettings {
   /// s1 outright, and subtrees of such partitions are marched whole. The default, +inf, computes every
   /// partition's step and, when sampling adaptively, marches every partition alone.
   float finestStepSigma = INFINITY;
+  /// One piece of a mesh split among processes: where `clip` is not empty, the ray's sample grid starts where
+  /// it enters `gridBounds` (the whole mesh's root bounds) and only its part inside `clip` (the piece's
+  /// region) is marched, so that the pieces take the whole mesh's samples, each once.
+  Box3f gridBounds, clip;
+  /// A piece's: the whole mesh's finest step scale, which sets the grid's spacing where steps follow the
+  /// mesh; 0 for the partitions' own.
+  float finestStepScale = 0.f;
 };
 
 /// The paper's step size for a partition of normalised deviation `sigma` (§2.4).
@@ -66,11 +73,17 @@ inline float finestStepSigma(float s1, float s2, float p) {
 /// it, so the finer steps cost little beside what they fix. Translucent functions never reach it.
 constexpr float kRefinedStepOpacity = 0.5f;
 
+/// The finest step scale: the partitions', or a piece's whole mesh's.
+UVR_HOST_DEVICE inline float finestStepScale(const IntegratorSettings &settings,
+                                             const PartitionsView &partitions) {
+  return settings.finestStepScale > 0.f ? settings.finestStepScale : partitions.finestStepScale;
+}
+
 /// The spacing of a ray's sample grid: s1, or where steps follow the mesh, half of s1 at the finest step
 /// scale (the refined steps of opaque partitions).
 UVR_HOST_DEVICE inline float gridSpacing(const IntegratorSettings &settings,
                                          const PartitionsView &partitions) {
-  return settings.followMesh ? 0.5f * settings.s1 * partitions.finestStepScale : settings.s1;
+  return settings.followMesh ? 0.5f * settings.s1 * finestStepScale(settings, partitions) : settings.s1;
 }
 
 /// The points a ray's samples lie on, t = origin + k * spacing, from where the ray enters the mesh bounds,
@@ -92,21 +105,43 @@ struct SampleGrid {
   }
 };
 
+/// The span [t0, t1] of `ray` inside `region`, one of the regions that the pieces of a mesh split space
+/// into: a ray lying in a face that two regions share belongs to the region above the face alone, where the
+/// slab test would give it to both.
+UVR_HOST_DEVICE inline bool clipToRegion(const Ray &ray, const Box3f &region, float &t0, float &t1) {
+  bool inside = intersectBox(ray, region, 0.f, INFINITY, t0, t1);
+  for (int axis = 0; axis < 3; ++axis)
+    if (ray.direction[axis] == 0.f)
+      inside = inside && region.lower[axis] <= ray.origin[axis] && ray.origin[axis] < region.upper[axis];
+  return inside;
+}
+
 /// One ray's intervals. forEach yields them with their steps, front to back; the march asks pastGap at each
 /// grid point it samples, since the gaps between boundary crossings cut across the partitions.
 class RayIntervals {
 public:
   /// The intervals of `ray`: the partitions it crosses, each at its step, and with skipping only those drawn
   /// and only between the ray's first and last `crossings` with the mesh's boundary, where these are known.
-  /// (`reference` marches the mesh bounds instead, from the grid's origin to boundsExit.)
+  /// (`reference` marches the mesh bounds instead, from boundsEnter to boundsExit.)
   UVR_HOST_DEVICE RayIntervals(const SceneView &scene, const IntegratorSettings &settings, const Ray &ray,
                                const BoundaryCrossings &crossings)
       : scene_(scene), settings_(settings), ray_(ray), crossings_(crossings) {
     // No early return: the fields then take one value on every path, which leaves the GPU's kernel fewer
     // values to keep (it spilled more with returns here).
     float tEnter;
-    const bool hit = intersectBox(ray, scene.partitions.rootBounds, 0.f, INFINITY, tEnter, tExit_);
-    grid_ = {tEnter, gridSpacing(settings, scene.partitions)};
+    bool hit = intersectBox(ray, scene.partitions.rootBounds, 0.f, INFINITY, tEnter, tExit_);
+    float gridOrigin = tEnter;
+    if (!settings.clip.empty()) {
+      float gridExit, clipEnter, clipExit;
+      const bool inGrid = intersectBox(ray, settings.gridBounds, 0.f, INFINITY, gridOrigin, gridExit);
+      const bool inClip = clipToRegion(ray, settings.clip, clipEnter, clipExit);
+      hit = hit && inGrid && inClip;
+      tEnter = maxf(maxf(tEnter, gridOrigin), clipEnter);
+      tExit_ = minf(tExit_, clipExit);
+      hit = hit && tEnter < tExit_;
+    }
+    tEnter_ = tEnter;
+    grid_ = {gridOrigin, gridSpacing(settings, scene.partitions)};
     skip_ = skipsSpace(settings.mode);
     adaptive_ = samplesAdaptively(settings.mode);
     // A hundredth of a step of slack at crossings: rounding never leaves out a sample that `reference` finds
@@ -127,7 +162,8 @@ public:
   /// Whether the ray meets no cell: it misses the mesh bounds or, skipping, every boundary face.
   UVR_HOST_DEVICE bool none() const { return none_; }
   UVR_HOST_DEVICE const SampleGrid &grid() const { return grid_; }
-  /// Where the ray leaves the mesh bounds (it enters them at the grid's origin).
+  /// Where the ray enters and leaves the mesh bounds (clipped to the piece's region, if any).
+  UVR_HOST_DEVICE float boundsEnter() const { return tEnter_; }
   UVR_HOST_DEVICE float boundsExit() const { return tExit_; }
   /// The tet the ray enters the mesh by, where the skipping modes know it; else kNoCell.
   UVR_HOST_DEVICE uint32_t entryTet() const {
@@ -183,7 +219,7 @@ private:
     const float sigma = scene_.nodeMinSigma[node];
     return sigma != kTransparentSigma && takesFinestStep(sigma) &&
            (!settings_.followMesh ||
-            (scene_.partitions.nodeMaxStepScale[node] <= scene_.partitions.finestStepScale &&
+            (scene_.partitions.nodeMaxStepScale[node] <= finestStepScale(settings_, scene_.partitions) &&
              scene_.nodeMaxOpacity[node] < kRefinedStepOpacity));
   }
 
@@ -193,7 +229,7 @@ private:
   const BoundaryCrossings &crossings_;
   bool none_;
   SampleGrid grid_;
-  float tExit_;
+  float tEnter_, tExit_;
   float tStart_, tStop_; ///< the span the skipping modes march, crossings and margins included
   float margin_;
   bool skip_, adaptive_, gaps_;

@@ -18,6 +18,7 @@ struct PixelTarget {
   uint8_t *rgb = nullptr;      ///< 3 bytes per pixel, row-major, top row first
   float *opacity = nullptr;    ///< accumulated opacity per pixel; null: not kept
   uint32_t *samples = nullptr; ///< samples taken per pixel; null: not kept
+  float *rgba = nullptr;       ///< premultiplied colour and opacity, before the background; null: not kept
   int width = 0;
   Vec3f background;
 
@@ -34,6 +35,12 @@ struct PixelTarget {
       opacity[index] = result.color.w;
     if (samples)
       samples[index] = result.samples;
+    if (rgba) {
+      rgba[4 * index + 0] = result.color.x;
+      rgba[4 * index + 1] = result.color.y;
+      rgba[4 * index + 2] = result.color.z;
+      rgba[4 * index + 3] = result.color.w;
+    }
   }
 };
 

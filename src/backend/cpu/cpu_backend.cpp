@@ -69,7 +69,8 @@ SampleTotals CpuBackend::render(const CameraView &camera, const IntegratorSettin
   // simple partitioner splits down to them; the default one handed out ranges of up to 64×128 pixels.
   constexpr int kTile = 16;
   // A trail entry per grid point along the longest ray through the mesh bounds, within reason.
-  const Box3f &bounds = scene.partitions.rootBounds;
+  // (For a piece of a mesh, along the whole mesh's bounds: its sample grid is the whole mesh's.)
+  const Box3f &bounds = settings.clip.empty() ? scene.partitions.rootBounds : settings.gridBounds;
   const float gridPoints =
       length(bounds.upper - bounds.lower) / gridSpacing(settings, scene.partitions) + 2.f;
   const uint32_t trailSize = scene.tetNeighbors ? uint32_t(minf(gridPoints, float(1 << 20))) : 0;

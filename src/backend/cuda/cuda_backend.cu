@@ -15,6 +15,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cstring>
 #include <optional>
 #include <string>
@@ -122,6 +123,7 @@ private:
 };
 
 struct CudaBackend::Impl {
+  int device = 0; // made current on entry: a process may hold backends on several GPUs
   std::string deviceName;
   SceneView scene; // device pointers
   DeviceBuffer<Vec3f> points;
@@ -139,6 +141,7 @@ struct CudaBackend::Impl {
   DeviceBuffer<Vec4f> tfTable, tfExtinction, tfExtinctionIntegral;
   DeviceBuffer<uint8_t> rgb;
   DeviceBuffer<float> opacity;
+  DeviceBuffer<float> rgba;
   DeviceBuffer<uint32_t> samples;
   DeviceBuffer<SampleTotals> sampleTotals;
   DeviceCrossings crossings;
@@ -165,6 +168,17 @@ struct CudaBackend::Impl {
   }
 };
 
+namespace {
+std::atomic<int> cudaDeviceChoice{0};
+} // namespace
+
+int cudaDevicesVisible() {
+  int devices = 0;
+  return cudaGetDeviceCount(&devices) == cudaSuccess ? devices : 0;
+}
+void selectCudaDevice(int ordinal) { cudaDeviceChoice = ordinal; }
+int selectedCudaDevice() { return cudaDeviceChoice; }
+
 CudaBackend::CudaBackend(const Mesh &hostMesh, const MeshView &mesh, uint32_t leafSize)
     : impl_(std::make_unique<Impl>()) {
   const uint64_t pointCount = hostMesh.points.size();
@@ -173,11 +187,13 @@ CudaBackend::CudaBackend(const Mesh &hostMesh, const MeshView &mesh, uint32_t le
   if (status != cudaSuccess || devices == 0)
     throw Error(std::string("no CUDA GPU available") +
                 (status != cudaSuccess ? std::string(": ") + cudaGetErrorString(status) : std::string()));
-  cudaDeviceProp properties{};
-  UVR_CUDA_CHECK(cudaGetDeviceProperties(&properties, 0));
-  impl_->deviceName = properties.name;
-
   Impl &d = *impl_;
+  d.device = selectedCudaDevice() < devices ? selectedCudaDevice() : 0;
+  UVR_CUDA_CHECK(cudaSetDevice(d.device));
+  cudaDeviceProp properties{};
+  UVR_CUDA_CHECK(cudaGetDeviceProperties(&properties, d.device));
+  d.deviceName = properties.name;
+
   UVR_CUDA_CHECK(cudaEventCreate(&d.kernelStart));
   UVR_CUDA_CHECK(cudaEventCreate(&d.kernelEnd));
   UVR_CUDA_CHECK(cudaEventCreate(&d.renderStart));
@@ -213,6 +229,7 @@ CudaBackend::~CudaBackend() = default;
 
 uint32_t CudaBackend::setTransferFunction(const TransferFunction &tf) {
   Impl &d = *impl_;
+  UVR_CUDA_CHECK(cudaSetDevice(d.device));
   TransferFunctionRangeView ranges = tf.rangeView();
   ranges.function.table = d.tfTable.upload(tf.table().data(), tf.table().size());
   ranges.function.extinction = d.tfExtinction.upload(tf.extinction().data(), tf.extinction().size());
@@ -267,18 +284,21 @@ SampleTotals CudaBackend::render(const CameraView &camera, const IntegratorSetti
                                  const ShadingSettings &shading, const PixelTarget &target,
                                  double &kernelMs) {
   Impl &d = *impl_;
+  UVR_CUDA_CHECK(cudaSetDevice(d.device));
   const int height = camera.height;
   SampleTotals samples;
   const size_t pixels = size_t(target.width) * size_t(height);
   d.rgb.resize(3 * pixels);
   d.opacity.resize(target.opacity ? pixels : 0);
   d.samples.resize(target.samples ? pixels : 0);
+  d.rgba.resize(target.rgba ? 4 * pixels : 0);
   d.sampleTotals.resize(1);
   UVR_CUDA_CHECK(cudaMemsetAsync(d.sampleTotals.data(), 0, d.sampleTotals.bytes()));
   PixelTarget device = target;
   device.rgb = d.rgb.data();
   device.opacity = target.opacity ? d.opacity.data() : nullptr;
   device.samples = target.samples ? d.samples.data() : nullptr;
+  device.rgba = target.rgba ? d.rgba.data() : nullptr;
   const bool skipping = skipsSpace(settings.mode);
   const int trial = skipping ? d.skippingFrames : 0; // 1: rows timed, 2: tiles timed
   if (skipping && d.skippingFrames < 3)
@@ -317,7 +337,8 @@ SampleTotals CudaBackend::render(const CameraView &camera, const IntegratorSetti
   const Part parts[] = {{&samples, d.sampleTotals.data(), d.sampleTotals.bytes()},
                         {target.rgb, d.rgb.data(), d.rgb.bytes()},
                         {target.opacity, d.opacity.data(), d.opacity.bytes()},
-                        {target.samples, d.samples.data(), d.samples.bytes()}};
+                        {target.samples, d.samples.data(), d.samples.bytes()},
+                        {target.rgba, d.rgba.data(), d.rgba.bytes()}};
   size_t stagedBytes = 0;
   for (const Part &part : parts)
     stagedBytes += part.bytes;

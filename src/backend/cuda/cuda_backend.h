@@ -14,6 +14,12 @@
 
 namespace uvr {
 
+/// The GPUs the CUDA runtime sees; 0 where it finds none.
+int cudaDevicesVisible();
+/// The GPU that backends made from now on use (0 where `ordinal` is not one of them).
+void selectCudaDevice(int ordinal);
+int selectedCudaDevice();
+
 class CudaBackend final : public RenderBackend {
 public:
   /// Uploads `view` of `mesh` to the current GPU and builds the acceleration data there, with partitions of

@@ -349,7 +349,7 @@ void DeviceBuilder::partitions() {
     sizeLog2Sums.download(sums.data(), leaves);
     out_.partitions.cellCounts.download(counts.data(), leaves);
     out_.partitions.nodes.download(hostNodes.data(), nodeCount);
-    const StepScales scales = computeStepScales(sums, counts, hostNodes);
+    const StepScales scales = computeStepScales(sums, counts, hostNodes, mesh_.stepScaleReference);
     out_.partitions.stepScale.upload(scales.partition.data(), scales.partition.size());
     out_.partitions.nodeMaxStepScale.upload(scales.node.data(), scales.node.size());
     out_.partitions.finestStepScale = scales.finest;

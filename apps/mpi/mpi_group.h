@@ -1,0 +1,59 @@
+// The ranks of an MPI run (mpirun -np N uvr ...), as the command uses them: started only where a launcher
+// started this process, every fallible step agreed on by all ranks, and the images composited. The header
+// holds no MPI type, so that the command compiles the same with or without MPI.
+#pragma once
+
+#include <cstdint>
+#include <cstdlib>
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace uvr {
+
+/// Whether an MPI launcher (mpirun, mpiexec, srun) started this process among several: read from the
+/// environment (Open MPI's, PMI's and PMIx's), so that a plain run neither needs nor starts MPI.
+inline bool startedByMpiLauncher() {
+  for (const char *name : {"OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_SIZE"}) {
+    const char *value = std::getenv(name);
+    if (value && std::atoi(value) > 1)
+      return true;
+  }
+  return false;
+}
+
+class MpiGroup {
+public:
+  /// MPI_Init; MPI_Finalize on destruction.
+  MpiGroup();
+  ~MpiGroup();
+  MpiGroup(const MpiGroup &) = delete;
+  MpiGroup &operator=(const MpiGroup &) = delete;
+
+  int rank() const { return rank_; }
+  int size() const { return size_; }
+  /// The rank among those on this node: which GPU it takes.
+  int localRank() const { return localRank_; }
+
+  /// Runs `work` on every rank, then agrees on its success: where it threw on any rank, rank 0 prints the
+  /// lowest such rank's message and every rank ends with status 2 (no rank is left waiting).
+  void step(const std::function<void()> &work);
+
+  void barrier();
+  double maxOf(double value);
+  uint64_t sumOf(uint64_t value);
+  /// Every rank's value, at rank 0 (empty elsewhere).
+  std::vector<double> gather(double value);
+  /// The element-wise sums of every rank's `values` (all of one length), at rank 0 (empty elsewhere).
+  std::vector<uint32_t> sum(const std::vector<uint32_t> &values);
+
+  /// Composites every rank's premultiplied RGBA image (`width` x `height`, 4 floats a pixel) front to back
+  /// in `order` (ranks, front first) by direct send: each rank composites a band of rows from every rank's
+  /// part of it, and rank 0 gathers the bands into `rgba`. Returns the bytes this rank sent.
+  uint64_t composite(std::vector<float> &rgba, int width, int height, const std::vector<int> &order);
+
+private:
+  int rank_ = 0, size_ = 1, localRank_ = 0;
+};
+
+} // namespace uvr
