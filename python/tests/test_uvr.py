@@ -478,7 +478,8 @@ def test_default_opacity_unit_follows_the_domain_not_the_finest_cells():
     assert stats["unit"] == pytest.approx(np.sqrt(20 ** 2 + 4 ** 2 + 4 ** 2) / len(cells) ** (1 / 3), rel=1e-5)
     thin = renderer.render(size=(128, 128), camera={"view": "-y"}, unit=stats["s1"])
     spread = lambda img: img[:, :, :3].astype(float).mean(axis=2)[img[:, :, 3] > 0].std()
-    assert spread(image) > 1.5 * spread(thin)
+    # Converged images (reference, s1 / 8) of the two units differ by 1.13x in spread.
+    assert spread(image) > 1.1 * spread(thin)
 
 
 def test_set_field_keeps_the_grid_and_renders_as_a_new_renderer():
