@@ -378,7 +378,7 @@ public:
                               const py::object &mode, const py::object &s1, const py::object &s2,
                               const py::object &p, const py::object &unit, const py::object &size,
                               const py::object &background, const py::object &compositing,
-                              const py::object &steps) {
+                              const py::object &steps, const py::object &shade, const py::object &light) {
     // Every keyword is checked here, naming it, before any work (uvr.Error).
     std::vector<int64_t> sides;
     try {
@@ -395,6 +395,11 @@ public:
     settings.width = width;
     settings.height = height;
     settings.background = toVec3(background, "background");
+    if (!py::isinstance<py::bool_>(shade))
+      throw Error("shade expects True or False");
+    settings.shade = shade.cast<bool>();
+    if (!light.is_none())
+      settings.light = toVec3(light, "light");
     settings.mode = parseMode(mode.cast<std::string>());
     if (!py::isinstance<py::str>(compositing))
       throw Error("compositing expects auto, point or preintegrated");
@@ -642,9 +647,10 @@ PYBIND11_MODULE(uvr, m) {
            py::arg("p") = py::none(), py::arg("unit") = py::none(),
            py::arg("size") = std::pair<int, int>(1024, 1024),
            py::arg("background") = py::make_tuple(0.f, 0.f, 0.f), py::arg("compositing") = "auto",
-           py::arg("steps") = "auto",
+           py::arg("steps") = "auto", py::arg("shade") = false, py::arg("light") = py::none(),
            "Returns an (h, w, 4) uint8 array: RGB composited over the background, and accumulated opacity x "
-           "255")
+           "255. shade: light by the field's gradient; light: (x, y, z) towards the light in camera space "
+           "(None: a headlight)")
       .def("set_field", &PyRenderer::setField, py::arg("mesh"), py::arg("field") = py::none(),
            "Renders `field` of `mesh` (a later time step, or other values on the same grid) keeping the "
            "acceleration data: only the partitions' value ranges are recomputed. Its points and cells must "

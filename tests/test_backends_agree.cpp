@@ -179,6 +179,48 @@ TEST(BackendsAgree, CudaRendersTheCpuImage) {
   }
 }
 
+TEST(BackendsAgree, CudaShadesAsTheCpu) {
+  for (CellType type : {CellType::Tetra, CellType::Hexahedron}) {
+    const Mesh mesh =
+        buildMesh(makeBoxGrid(
+                      type, 12, {{-1.f, -1.f, -1.f}, {1.f, 1.f, 1.f}},
+                      [](Vec3f p) { return 1.f - length(p) + 0.1f * std::sin(5.f * p.x); }, 0.2f),
+                  "ball");
+    Renderer renderer(mesh, mesh.findField("f"), 16);
+    ColorMap map;
+    map.rgbPoints = {0.f, 0.f, 0.f, 1.f, 0.5f, 0.f, 1.f, 0.f, 1.f, 1.f, 0.f, 0.f};
+    map.opacityPoints = {0.f,  0.f,  0.5f, 0.f, 0.4f, 0.f, 0.5f, 0.f,
+                         0.6f, 0.8f, 0.5f, 0.f, 1.f,  1.f, 0.5f, 0.f};
+    renderer.setTransferFunction(TransferFunction(map, 0.f, 1.f));
+    if (!haveCudaDevice(renderer))
+      GTEST_SKIP() << "no CUDA GPU here; scripts/gpu-check runs this where there is one";
+    Camera camera;
+    camera.eye = {2.3f, 1.6f, 3.f};
+    camera.at = {0.f, 0.f, 0.f};
+    for (bool preintegrate : {false, true}) {
+      for (bool headlight : {true, false}) {
+        RenderSettings settings;
+        settings.width = 100;
+        settings.height = 61;
+        settings.integrator.mode = RenderMode::Full;
+        settings.integrator.s1 = 0.02f;
+        settings.integrator.s2 = 0.1f;
+        settings.integrator.p = 4.f;
+        settings.integrator.unit = 0.1f;
+        settings.integrator.preintegrate = preintegrate;
+        settings.integrator.shade = true;
+        settings.shading.headlight = headlight;
+        settings.shading.light = {1.f, 1.f, 1.f};
+        const Frame cpu = renderer.render(camera, settings);
+        settings.backend = Backend::Cuda;
+        const Frame cuda = renderer.render(camera, settings);
+        EXPECT_GE(ssim(cpu.image, cuda.image), 0.995) << "cell type " << int(type) << ", pre-integrated "
+                                                      << preintegrate << ", headlight " << headlight;
+      }
+    }
+  }
+}
+
 TEST(BackendsAgree, CudaComputesTheHostsPartitionMetadata) {
   const Mesh mesh =
       buildMesh(makeBoxGrid(

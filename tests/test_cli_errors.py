@@ -68,6 +68,8 @@ def main():
                 cases += [(base + [option, v], option) for v in camera_values]
             cases += [(base + ["--view", v], "--view") for v in ["bogus", "x", "+w", ""]]
             cases += [(base + ["--mode", "bogus"], "--mode"), (base + ["--backend", "bogus"], "--backend")]
+            cases += [(base + ["--shade", "--light", v], "--light") for v in ["nan,0,0", "inf,0,0", "1,2", "a,b,c"]]
+            cases += [(base + ["--light", "1,0,0"], "--light")]  # without --shade
             cases += [(base + ["--tf", "no-such-preset"], "--tf"),
                       (base + ["--tf", os.path.join(tmp, "missing.json")], "--tf")]
             cases += [(base + ["--bogus-option"], "--bogus-option")]
@@ -143,6 +145,12 @@ def main():
         leftovers = sorted(set(os.listdir(tmp)) - {"out.png", "s.json", "v.raw"})
         if result.returncode != 0 or not os.path.exists(out) or not os.path.exists(stats) or leftovers:
             failures.append(f"a good render: exit {result.returncode}, files left: {leftovers}: {result.stderr}")
+
+        # --shade and --light parse, render, and say so in the statistics.
+        result = run(uvr, render + ["--shade", "--light", "1,1,1", "--stats", stats])
+        if result.returncode != 0 or '"shaded": true' not in open(stats).read():
+            failures.append(f"a shaded render: exit {result.returncode}: {result.stderr.strip()}")
+        os.remove(out)
 
         # A constant field is rendered visibly, with a warning; --range 5 5 on it is refused above.
         constant = os.path.join(tmp, "constant.vtu")

@@ -32,6 +32,8 @@ nlohmann::json frameStatsJson(const FrameStats &s) {
       {"p", s.p},
       {"unit", s.unit},
       {"leaf_size", s.leafSize},
+      {"shaded", s.shaded},
+      {"gradient_bytes", s.gradientBytes},
       {"field", s.field},
       {"range", {s.range.min, s.range.max}},
       {"backend", backendName(s.backend)},

@@ -126,6 +126,12 @@ void addRenderOptions(CLI::App *cmd, RenderOptions &o, bool timeRanges) {
   cmd->add_option("--background", o.background, "Background colour R,G,B, each in [0, 1]")
       ->capture_default_str();
   cmd->add_option("--backend", o.backend, "cpu or cuda")->capture_default_str();
+  cmd->add_flag("--shade", o.shade,
+                "Light the volume by the field's gradient (Blinn-Phong: ambient 0.2, diffuse 0.7, specular "
+                "0.2, shininess 16)");
+  cmd->add_option("--light", o.light,
+                  "With --shade, direction towards the light X,Y,Z in camera space: x right, y up, z towards "
+                  "the viewer (default: a headlight at the eye)");
 }
 
 LoadedMesh loadForRendering(const RenderOptions &o) { return loadForRendering(o, o.timeStep); }
@@ -173,6 +179,12 @@ FrameSettings parseFrameSettings(const RenderOptions &o) {
   for (const float c : {settings.background.x, settings.background.y, settings.background.z})
     if (!(c >= 0.f && c <= 1.f))
       throw Error("--background expects R,G,B each in [0, 1], got '" + o.background + "'");
+  settings.shade = o.shade;
+  if (!o.light.empty()) {
+    settings.light = parseVector(o.light, "light");
+    if (!o.shade)
+      throw Error("--light needs --shade");
+  }
   settings.mode = parseMode(o.mode);
   settings.compositing = parseCompositing(o.compositing);
   settings.steps = parseStepSizing(o.steps);

@@ -32,6 +32,8 @@ struct RenderOptions {
   float fovy = 30.f;
   std::string background = "0,0,0";
   std::string backend = "cpu";
+  bool shade = false;
+  std::string light; ///< X,Y,Z in camera space; empty: the headlight
 };
 
 /// Registers MESH and the options that describe a view (field, transfer function, sampling, camera, size);

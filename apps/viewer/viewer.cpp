@@ -36,6 +36,7 @@ struct Controls {
   ValueRange range;
   RenderMode mode = RenderMode::Full;
   float s1 = 0.f, s2 = 0.f, p = 0.f; ///< 0: the default
+  bool shade = false;
   bool heatmap = false;
 };
 
@@ -48,7 +49,8 @@ bool sameView(const ViewState &a, const ViewState &b) {
          a.colorMap.opacityPoints == b.colorMap.opacityPoints &&
          a.colorMap.colorSpace == b.colorMap.colorSpace && a.range.min == b.range.min &&
          a.range.max == b.range.max && i.mode == j.mode && i.s1 == j.s1 && i.s2 == j.s2 && i.p == j.p &&
-         i.unit == j.unit && a.settings.width == b.settings.width && a.settings.height == b.settings.height;
+         i.unit == j.unit && i.shade == j.shade && a.settings.width == b.settings.width &&
+         a.settings.height == b.settings.height;
 }
 
 nlohmann::json vectorJson(Vec3f v) { return {v.x, v.y, v.z}; }
@@ -100,6 +102,7 @@ public:
     controls_.s1 = setup.settings.s1;
     controls_.s2 = setup.settings.s2;
     controls_.p = setup.settings.p;
+    controls_.shade = setup.settings.shade;
     presets_ = builtinColorMapNames();
     for (const ColorMap &map : setup.presets)
       presets_.push_back(map.name);
@@ -155,6 +158,7 @@ private:
     state.settings.s1 = controls_.s1;
     state.settings.s2 = controls_.s2;
     state.settings.p = controls_.p;
+    state.settings.shade = controls_.shade;
     state.settings = withDefaultSampling(state.settings, setup_.defaultStep, setup_.defaultUnit);
     return state;
   }
@@ -281,6 +285,7 @@ private:
     ImGui::SetNextItemWidth(150.f);
     if (ImGui::Combo("Mode", &mode, modes, 4))
       controls_.mode = parseMode(modes[mode]);
+    ImGui::Checkbox("Shade", &controls_.shade);
     const float step = setup_.defaultStep;
     ImGui::SetNextItemWidth(150.f);
     ImGui::DragFloat("s1", &controls_.s1, step * 0.01f, step * 0.05f, step * 16.f, "%.4g");

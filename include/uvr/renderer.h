@@ -34,6 +34,8 @@ struct FrameStats {
   double renderMs = 0.0;   ///< this frame, wall clock
   float s1 = 0.f, s2 = 0.f, p = 0.f, unit = 0.f;
   uint32_t leafSize = 0;
+  bool shaded = false;        ///< lit by the field's gradient (FrameSettings::shade)
+  uint64_t gradientBytes = 0; ///< host memory of the gradient per point; 0 until a frame is shaded
   std::string field;
   ValueRange range; ///< what the transfer function spans
   Backend backend = Backend::Cpu;

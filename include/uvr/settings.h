@@ -88,6 +88,15 @@ struct FrameSettings {
   /// (+inf: it does not), so that opaque geometry drawn by another renderer (its depth buffer converted to
   /// distances) hides the volume behind it. Viewed, not copied: the array must outlive the frame.
   std::span<const float> rayLimits;
+  /// Light each sample by the field's gradient (Blinn-Phong, two-sided), blended with the unlit colour by
+  /// the gradient's magnitude so that near-uniform regions stay unlit (docs/design.md, "Shading"). The
+  /// gradient per point (12 bytes a point) is computed on the host by the first shaded frame.
+  bool shade = false;
+  /// Towards the light in camera space (x right, y up, z towards the eye; any length); 0,0,0: a headlight
+  /// at the eye, whose light comes along each ray.
+  Vec3f light{0.f, 0.f, 0.f};
+  float ambient = 0.2f, diffuse = 0.7f, specular = 0.2f; ///< Blinn-Phong's coefficients, >= 0
+  float shininess = 16.f;                                ///< the specular exponent, >= 1
 };
 
 /// `settings` with its defaults filled in (0 for s1, s2, p or unit) for a mesh of default step `defaultStep`
@@ -104,8 +113,8 @@ float defaultUnitDistance(const Box3f &bounds, uint64_t cells);
 
 /// Throws uvr::Error for settings no frame can be drawn with: a negative or non-finite s1, s2, p or unit (0
 /// asks for the default), s2 < s1 or p < 1 where both are given, a size outside 1..16384, or a background
-/// outside [0, 1], or ray limits that are not one non-negative number (or +inf) per pixel. The message names
-/// the setting.
+/// outside [0, 1], ray limits that are not one non-negative number (or +inf) per pixel, a non-finite light,
+/// a negative shading coefficient or a shininess below 1. The message names the setting.
 void validateSettings(const FrameSettings &settings);
 
 } // namespace uvr

@@ -274,6 +274,8 @@ BAD_NUMBERS = [0, -1, float("nan"), float("inf"), "abc", [1, 2]]
     ("mode", ["bogus", 3, None]),
     ("compositing", ["bogus", 3, None]),
     ("steps", ["bogus", 3, None]),
+    ("shade", ["yes", 1, None]),
+    ("light", [(1, 2), "abc", (float("nan"), 0, 0), (float("inf"), 0, 0)]),
     ("camera", [{"fovy": 0}, {"fovy": 180}, {"fovy": 200}, {"fovy": float("nan")}, {"fovy": "abc"},
                 {"eye": (0, 0, 0), "at": (0, 0, 0)}, {"eye": (float("nan"), 0, 0)}, {"at": (float("inf"), 0, 0)},
                 {"up": (0, 0, 1)}, {"up": (0, 0, 0)}, {"up": (float("nan"), 0, 1)}, {"view": "bogus"},
@@ -310,6 +312,20 @@ def test_compositing_and_steps_as_the_command(tmp_path):
     assert (renderer.last_stats["compositing"], renderer.last_stats["steps"]) == ("preintegrated", "local")
     renderer.render(camera=camera, size=(8, 8), mode="reference")
     assert (renderer.last_stats["compositing"], renderer.last_stats["steps"]) == ("point", "global")
+
+
+def test_shade_as_the_command(tmp_path):
+    """shade and light draw what --shade and --light draw; shading changes the image."""
+    renderer = uvr.Renderer(uvr.load(DISK), field="Temp")
+    camera = {"eye": (40.0, 22.5, 20.08), "at": (0.0, 0.0, 0.08), "up": (0, 0, 1)}
+    png = tmp_path / "shaded.png"
+    result = run_cli("render", DISK, "--field", "Temp", "--eye", "40,22.5,20.08", "--at", "0,0,0.08", "--up", "0,0,1",
+                     "--size", "64x64", "--shade", "--light", "1,1,1", "-o", str(png))
+    assert result.returncode == 0, result.stderr
+    shaded = renderer.render(camera=camera, size=(64, 64), shade=True, light=(1, 1, 1))
+    np.testing.assert_array_equal(shaded[:, :, :3], uvr.read_png(str(png)))
+    plain = renderer.render(camera=camera, size=(64, 64))
+    assert not np.array_equal(shaded, plain)
 
 
 def test_every_constructor_keyword_is_checked():

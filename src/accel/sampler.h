@@ -292,6 +292,49 @@ UVR_HOST_DEVICE UVR_HOST_INLINE bool locateSample(const VolumeView &volume, bool
   });
 }
 
+/// A per-point vector (the field's gradient) interpolated to `p`, the point at `t` on a ray, in `at.cell`,
+/// the cell the sampler found it in: a tet by the weights the walk carries (or, where it found the tet
+/// another way, its barycentric weights), another cell by its shape functions, or where their solve fails,
+/// the mean of its corners.
+UVR_HOST_DEVICE inline Vec3f interpolatePointVectors(const MeshView &mesh, const Vec3f *perPoint,
+                                                     const RayCell &at, Vec3f p, float t) {
+  int count;
+  const uint32_t *v = cellCorners(mesh, at.cell, count);
+  if (count == 4) {
+    float w[4];
+    if (at.affine) {
+      for (int i = 0; i < 4; ++i)
+        w[i] = at.w[i] + (t - at.t) * at.dw[i];
+    } else if (!tetBarycentrics(mesh.points[v[0]], mesh.points[v[1]], mesh.points[v[2]], mesh.points[v[3]], p,
+                                w)) {
+      w[0] = w[1] = w[2] = w[3] = 0.25f;
+    }
+    return perPoint[v[0]] * w[0] + perPoint[v[1]] * w[1] + perPoint[v[2]] * w[2] + perPoint[v[3]] * w[3];
+  }
+  float weights[8];
+  bool solved = false;
+  if (count == 5) {
+    ShapeFunctions<5> s;
+    if ((solved = isoparametricWeights<5>(mesh.points, v, p, s)))
+      for (int i = 0; i < 5; ++i)
+        weights[i] = s.value[i];
+  } else if (count == 6) {
+    ShapeFunctions<6> s;
+    if ((solved = isoparametricWeights<6>(mesh.points, v, p, s)))
+      for (int i = 0; i < 6; ++i)
+        weights[i] = s.value[i];
+  } else {
+    ShapeFunctions<8> s;
+    if ((solved = isoparametricWeights<8>(mesh.points, v, p, s)))
+      for (int i = 0; i < 8; ++i)
+        weights[i] = s.value[i];
+  }
+  Vec3f sum{};
+  for (int i = 0; i < count; ++i)
+    sum = sum + perPoint[v[i]] * (solved ? weights[i] : 1.f / float(count));
+  return sum;
+}
+
 /// Samples one ray's field at growing t: what the sampler carries along a ray (the cell of its last sample,
 /// and on the host the trail) around locateSample.
 template <class Sampling> struct RaySampler {
@@ -328,6 +371,11 @@ template <class Sampling> struct RaySampler {
   UVR_HOST_DEVICE void enter(uint32_t tet) { at.enter(tet); }
   /// The cell of the last sample located, or the one near it the sampler started from.
   UVR_HOST_DEVICE uint32_t cell() const { return at.cell; }
+
+  /// A per-point vector interpolated to the last sample located, at `t` (see interpolatePointVectors).
+  UVR_HOST_DEVICE Vec3f pointVectorAt(const Vec3f *perPoint, float t) const {
+    return interpolatePointVectors(volume.mesh, perPoint, at, ray.at(t), t);
+  }
 
   /// The field at `t`, grid point `k`, into `value`; false where no cell holds the sample. `walkSteps` and
   /// `far` as locateSample takes them.

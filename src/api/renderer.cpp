@@ -199,6 +199,14 @@ void VolumeRenderer::render(const Camera &camera, const FrameSettings &settings,
   internal.integrator.unit = s.unit;
   internal.integrator.preintegrate = preintegrates(s.compositing, s.mode);
   internal.integrator.followMesh = stepsFollowMesh(s.steps, s.mode);
+  internal.integrator.shade = s.shade;
+  ShadingSettings &shading = internal.shading;
+  shading.headlight = s.light.x == 0.f && s.light.y == 0.f && s.light.z == 0.f;
+  shading.light = shading.headlight ? Vec3f{0.f, 0.f, 1.f} : s.light;
+  shading.ambient = s.ambient;
+  shading.diffuse = s.diffuse;
+  shading.specular = s.specular;
+  shading.shininess = s.shininess;
   internal.background = s.background;
   internal.width = s.width;
   internal.height = s.height;
@@ -245,6 +253,8 @@ void VolumeRenderer::render(const Camera &camera, const FrameSettings &settings,
   stats.p = s.p;
   stats.unit = s.unit;
   stats.leafSize = renderer.leafSize();
+  stats.shaded = s.shade;
+  stats.gradientBytes = renderer.gradientBytes();
   stats.field = impl_->mesh.field(impl_->fieldIndex).name;
   stats.range = {renderer.transferFunction().valueMin(), renderer.transferFunction().valueMax()};
   stats.backend = s.backend;

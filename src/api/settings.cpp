@@ -10,6 +10,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
+#include <utility>
 
 namespace uvr {
 
@@ -132,6 +134,14 @@ void validateSettings(const FrameSettings &s) {
       if (!(limit >= 0.f))
         throw Error("rayLimits must be non-negative distances or +inf; got " + std::to_string(limit));
   }
+  if (!std::isfinite(s.light.x) || !std::isfinite(s.light.y) || !std::isfinite(s.light.z))
+    throw Error("the light direction must be finite");
+  for (const auto &[value, name] :
+       {std::pair{s.ambient, "ambient"}, std::pair{s.diffuse, "diffuse"}, std::pair{s.specular, "specular"}})
+    if (!(value >= 0.f) || !std::isfinite(value))
+      throw Error(std::string(name) + " must be a finite number >= 0; got " + std::to_string(value));
+  if (!(s.shininess >= 1.f) || !std::isfinite(s.shininess))
+    throw Error("shininess must be a finite number >= 1; got " + std::to_string(s.shininess));
 }
 
 int threadCount() { return tbb::info::default_concurrency(); }

@@ -34,11 +34,15 @@ public:
   /// transfer function, are recomputed. Returns how many partitions are fully transparent (0 without a
   /// transfer function).
   virtual uint32_t setField(const MeshView &view) = 0;
+  /// Takes the field's gradient, `count` vectors per point (host memory, which must outlive the backend or
+  /// the next call), for shaded frames (IntegratorSettings::shade); null drops it.
+  virtual void setGradients(const Vec3f *gradients, uint64_t count) = 0;
   /// Draws a frame of `camera.width` x `camera.height` pixels into `target` (its host buffers) with the
-  /// current transfer function; returns the samples taken. `kernelMs` is the GPU time of the frame's
-  /// kernels, without copies; 0 on the CPU.
+  /// current transfer function, lit as `shading` says where `settings.shade`; returns the samples taken.
+  /// `kernelMs` is the GPU time of the frame's kernels, without copies; 0 on the CPU.
   virtual SampleTotals render(const CameraView &camera, const IntegratorSettings &settings,
-                              const PixelTarget &target, double &kernelMs) = 0;
+                              const ShadingSettings &shading, const PixelTarget &target,
+                              double &kernelMs) = 0;
 
   virtual uint32_t partitionCount() const = 0;
   /// Milliseconds the acceleration build took (on a GPU, the mesh's upload excluded), in all and per step

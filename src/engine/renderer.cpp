@@ -1,10 +1,13 @@
 #include "engine/renderer.h"
 
 #include "backend/cpu/cpu_backend.h"
+#include "mesh/point_gradients.h"
 #include "render/pixel.h"
 #include <uvr/error.h>
 #include <uvr/system.h>
 
+#include <algorithm>
+#include <cmath>
 #include <sstream>
 
 namespace uvr {
@@ -61,6 +64,16 @@ void Renderer::setField(const Mesh &mesh, int fieldIndex) {
   for (const std::unique_ptr<RenderBackend> &b : backends_)
     if (b)
       transparentPartitions_ = b->setField(meshView_);
+  if (gradientsBuilt_)
+    buildGradients();
+}
+
+void Renderer::buildGradients() {
+  gradients_ = computePointGradients(meshView_, mesh_->points.size());
+  gradientsBuilt_ = true;
+  for (const std::unique_ptr<RenderBackend> &b : backends_)
+    if (b)
+      b->setGradients(gradients_.data(), gradients_.size());
 }
 
 const TransferFunction &Renderer::transferFunction() const {
@@ -74,6 +87,8 @@ void Renderer::prepare(Backend which) {
   if (b)
     return;
   b = makeBackend(which, *mesh_, meshView_, leafSize());
+  if (gradientsBuilt_)
+    b->setGradients(gradients_.data(), gradients_.size());
   if (tf_)
     transparentPartitions_ = b->setTransferFunction(*tf_);
 }
@@ -166,10 +181,21 @@ void Renderer::render(const Camera &camera, const RenderSettings &settings, Fram
   derived.clip = region_;
   derived.gridBounds = gridBounds_;
   derived.finestStepScale = wholeFinestStepScale_;
+  const CameraView view = makeCameraView(camera, settings.width, settings.height, settings.rayLimits);
+  ShadingSettings shading = settings.shading;
+  if (s.shade) {
+    if (!gradientsBuilt_)
+      buildGradients();
+    const Vec3f light = settings.shading.light; // in camera space: x right, y up, z towards the eye
+    shading.light =
+        normalize(normalize(view.right) * light.x + normalize(view.up) * light.y - view.forward * light.z);
+    // Fully lit where the field changes by kFullyLitChange of the function's range across a mean cell.
+    const float range = tf_->valueMax() - tf_->valueMin();
+    const float meanCell = diagonal_ / std::cbrt(float(std::max<uint64_t>(mesh_->cellCount(), 1)));
+    shading.fullGradientInverse = range > 0.f ? meanCell / (kFullyLitChange * range) : 0.f;
+  }
   const SampleTotals samples =
-      backend(settings.backend)
-          .render(makeCameraView(camera, settings.width, settings.height, settings.rayLimits), derived,
-                  target, frame.kernelMs);
+      backend(settings.backend).render(view, derived, shading, target, frame.kernelMs);
   frame.samplesTotal = samples.total;
   frame.samplesMax = samples.max;
 }

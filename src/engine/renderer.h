@@ -3,6 +3,7 @@
 #pragma once
 
 #include "backend/backend.h"
+#include "core/vec.h"
 #include "mesh/mesh.h"
 #include "render/camera.h"
 #include "render/integrator.h"
@@ -31,6 +32,8 @@ struct RenderSettings {
   /// Null, or width x height distances, top row first, where each pixel's ray ends
   /// (FrameSettings::rayLimits).
   const float *rayLimits = nullptr;
+  /// How frames are lit where integrator.shade (the light in camera space).
+  ShadingSettings shading;
 };
 
 struct Frame {
@@ -109,9 +112,14 @@ public:
   const TransferFunction &transferFunction() const;
   /// Milliseconds the last setTransferFunction took on the backends prepared.
   double tfUpdateMs() const { return tfUpdateMs_; }
+  /// Host memory held by the field's gradient per point (computePointGradients), built by the first shaded
+  /// frame and rebuilt by setField; 0 until then.
+  size_t gradientBytes() const { return gradients_.size() * sizeof(Vec3f); }
 
 private:
   RenderBackend &backend(Backend backend) const; ///< throws where not prepared
+  /// Computes the field's gradients and hands them to every backend prepared.
+  void buildGradients();
   const class CpuBackend &cpu() const;
 
   const Mesh *mesh_;
@@ -124,6 +132,8 @@ private:
   std::optional<TransferFunction> tf_;
   uint32_t transparentPartitions_ = 0;
   double tfUpdateMs_ = 0.0;
+  std::vector<Vec3f> gradients_; // per point, once a frame is shaded
+  bool gradientsBuilt_ = false;
   std::unique_ptr<RenderBackend> backends_[2]; // by Backend
 };
 

@@ -11,6 +11,7 @@
 #include "render/boundary_crossings.h"
 #include "render/intervals.h"
 #include "render/scene_view.h"
+#include "render/shading.h"
 
 #include <cmath>
 #include <cstdint>
@@ -36,7 +37,18 @@ UVR_HOST_DEVICE inline void compositeBehind(Vec4f &color, const Vec4f &c) {
 /// paper's) gives each sample's colour to the distance to the next sample; pre-integration (kPreintegrate)
 /// gives each segment between two samples the function integrated over the values between them. A template
 /// parameter, not a setting: the GPU's kernel for point samples then carries none of pre-integration's state.
-template <class Sampling, bool kPreintegrate> struct RayMarch {
+/// Shading (kShade) likewise: it lights each sample's colour, or each segment's by the gradient at its start,
+/// and the unshaded kernels hold none of it.
+template <bool kShade> struct ShadeState {}; ///< unshaded, nothing: the GPU's kernels keep their size
+
+/// What a shaded march carries besides the unshaded one's.
+template <> struct ShadeState<true> {
+  const ShadingSettings *shading;
+  Vec3f pendingGradient; ///< the gradient at the pending sample
+  Vec3f toEye;           ///< along the ray towards the eye
+};
+
+template <class Sampling, bool kPreintegrate, bool kShade = false> struct RayMarch : ShadeState<kShade> {
   const SceneView &scene;
   const IntegratorSettings &settings;
   RayIntervals &intervals;
@@ -52,8 +64,14 @@ template <class Sampling, bool kPreintegrate> struct RayMarch {
   } pending;
 
   UVR_HOST_DEVICE RayMarch(const SceneView &scene, const IntegratorSettings &settings,
-                           RayIntervals &intervals, RaySampler<Sampling> &sampler, uint32_t &hint)
-      : scene(scene), settings(settings), intervals(intervals), sampler(sampler), hint(hint) {}
+                           RayIntervals &intervals, RaySampler<Sampling> &sampler, uint32_t &hint,
+                           const ShadingSettings *shading = nullptr)
+      : scene(scene), settings(settings), intervals(intervals), sampler(sampler), hint(hint) {
+    if constexpr (kShade) {
+      this->shading = shading;
+      this->toEye = normalize(Vec3f{} - sampler.ray.direction);
+    }
+  }
 
   /// Samples [ta, tb) every `step`, rounded to whole grid spacings; false once the ray is opaque. Not forced
   /// inline: called from two places (reference, and the partitions' traversal), the host keeps one copy,
@@ -146,10 +164,14 @@ template <class Sampling, bool kPreintegrate> struct RayMarch {
       const bool last = !(grid.at(kNext) < tb);
       if constexpr (kPreintegrate) {
         pending = {value, k, last ? kEnd : kNext, true};
+        if constexpr (kShade)
+          this->pendingGradient = sampler.pointVectorAt(this->shading->gradients, t);
       } else {
-        const Vec4f c = scene.tf.sample(value);
+        Vec4f c = scene.tf.sample(value);
         if (c.w <= 0.f)
           continue;
+        if constexpr (kShade)
+          c = shade(c, sampler.pointVectorAt(this->shading->gradients, t));
         compositeBehind(color, {c.x, c.y, c.z,
                                 correctedOpacity(c.w, ((last ? kEnd : kNext) - k) * spacing, settings.unit)});
       }
@@ -176,8 +198,17 @@ private:
   /// Composites the pending segment, its value running linearly to `endValue` at its end.
   UVR_HOST_DEVICE void closeSegment(Vec4f &color, float endValue, float spacing) {
     pending.valid = false;
-    compositeBehind(color, scene.tf.integrate(pending.value, endValue, (pending.next - pending.k) * spacing,
-                                              settings.unit));
+    Vec4f c =
+        scene.tf.integrate(pending.value, endValue, (pending.next - pending.k) * spacing, settings.unit);
+    if constexpr (kShade)
+      c = shade(c, this->pendingGradient);
+    compositeBehind(color, c);
+  }
+
+  /// `c` lit where the field's gradient is `gradient`.
+  UVR_HOST_DEVICE Vec4f shade(const Vec4f &c, Vec3f gradient) const {
+    const Vec3f rgb = shadeColor({c.x, c.y, c.z}, gradient, this->toEye, *this->shading);
+    return {rgb.x, rgb.y, rgb.z, c.w};
   }
 };
 
@@ -186,11 +217,12 @@ private:
 /// first cell. The skipping modes march only between the ray's first and last boundary crossings, and not
 /// through the gaps between them that lie outside the mesh, where `crossings` knows them. `trail`, where
 /// the policy follows one, holds by grid point the previous ray's guesses at this ray's tets, and takes this
-/// ray's at the next one's.
-template <class Sampling, bool kPreintegrate = false>
+/// ray's at the next one's. `kShade`: light the samples by the field's gradient as `shading` says.
+template <class Sampling, bool kPreintegrate = false, bool kShade = false>
 UVR_HOST_DEVICE inline RayResult integrateRay(const SceneView &scene, const IntegratorSettings &settings,
                                               const Ray &ray, uint32_t &hint,
-                                              const BoundaryCrossings &crossings, CellTrail trail = {}) {
+                                              const BoundaryCrossings &crossings, CellTrail trail = {},
+                                              const ShadingSettings *shading = nullptr) {
   RayIntervals intervals(scene, settings, ray, crossings);
   if (intervals.none())
     return {};
@@ -203,7 +235,7 @@ UVR_HOST_DEVICE inline RayResult integrateRay(const SceneView &scene, const Inte
   // The next ray's grid starts where it enters the mesh bounds, as this one's does.
   sampler.follow(trail, settings.clip.empty() ? scene.partitions.rootBounds : settings.gridBounds,
                  intervals.grid().spacing);
-  RayMarch<Sampling, kPreintegrate> march(scene, settings, intervals, sampler, hint);
+  RayMarch<Sampling, kPreintegrate, kShade> march(scene, settings, intervals, sampler, hint, shading);
   // Here rather than in forEach: with both calls to the march inside it, the GPU's kernel spilled more.
   if (settings.mode == RenderMode::Reference) {
     // The paper's reference ray marcher: the mesh bounds in one interval, at step s1.

@@ -40,6 +40,10 @@ struct IntegratorSettings {
   /// Scale each partition's steps by its cells' size (PartitionsView::stepScale), on a grid of the finest
   /// scale's spacing, rather than one s1 for the whole mesh.
   bool followMesh = false;
+  /// Light the samples by the field's gradient as ShadingSettings says: the backends pick
+  /// integrateRay<.., .., true>. Here, not at the end: the GPU's kernels copy these settings to local memory,
+  /// and in the padding the unshaded kernels' copy does not grow.
+  bool shade = false;
   /// Derived from s1, s2 and p by Renderer::render (finestStepSigma): partitions of greater sigma take step
   /// s1 outright, and subtrees of such partitions are marched whole. The default, +inf, computes every
   /// partition's step and, when sampling adaptively, marches every partition alone.

@@ -50,9 +50,13 @@ SceneView CpuBackend::sceneView() const {
 }
 
 SampleTotals CpuBackend::render(const CameraView &camera, const IntegratorSettings &settings,
-                                const PixelTarget &target, double &kernelMs) {
+                                const ShadingSettings &shading, const PixelTarget &target, double &kernelMs) {
   kernelMs = 0.0;
   const SceneView scene = sceneView();
+  if (settings.shade && !gradients_)
+    throw Error("a shaded frame needs the field's gradients");
+  ShadingSettings lit = shading;
+  lit.gradients = gradients_;
   const std::vector<uint32_t> &boundaryFaces = accel_.boundaryFaceList;
   std::vector<uint64_t> crossingStart, crossingKeys;
   const bool crossings = skipsSpace(settings.mode) && !boundaryFaces.empty() &&
@@ -95,7 +99,12 @@ SampleTotals CpuBackend::render(const CameraView &camera, const IntegratorSettin
                           : BoundaryCrossings{};
             // A ray that crosses no boundary face is done at once.
             const RayResult result =
-                along.none() ? RayResult{}
+                along.none()     ? RayResult{}
+                : settings.shade ? settings.preintegrate
+                                       ? integrateRay<HostSampling, true, true>(scene, settings, ray, hint,
+                                                                                along, trail, &lit)
+                                       : integrateRay<HostSampling, false, true>(scene, settings, ray, hint,
+                                                                                 along, trail, &lit)
                 : settings.preintegrate
                     ? integrateRay<HostSampling, true>(scene, settings, ray, hint, along, trail)
                     : integrateRay<HostSampling, false>(scene, settings, ray, hint, along, trail);

@@ -14,8 +14,9 @@ public:
 
   uint32_t setTransferFunction(const TransferFunction &tf) override;
   uint32_t setField(const MeshView &view) override;
-  SampleTotals render(const CameraView &camera, const IntegratorSettings &settings, const PixelTarget &target,
-                      double &kernelMs) override;
+  void setGradients(const Vec3f *gradients, uint64_t) override { gradients_ = gradients; }
+  SampleTotals render(const CameraView &camera, const IntegratorSettings &settings,
+                      const ShadingSettings &shading, const PixelTarget &target, double &kernelMs) override;
   uint32_t partitionCount() const override { return accel_.partitions.count(); }
   double buildMs() const override { return buildMs_; }
   HostAcceleration acceleration() const override { return accel_; }
@@ -29,6 +30,7 @@ private:
   SceneView sceneView() const; ///< all a ray reads; needs the transfer function
 
   MeshView mesh_;
+  const Vec3f *gradients_ = nullptr;
   HostAcceleration accel_;
   double buildMs_ = 0.0;
   std::optional<TransferFunction> tf_;

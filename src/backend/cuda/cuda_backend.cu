@@ -42,11 +42,11 @@ dim3 renderBlock(RenderMode mode, bool tiles) {
 /// docs/results/log.md.)
 constexpr int kMarchingBlocksPerSm = 5, kSkippingBlocksPerSm = 4;
 
-template <class Sampling, int BlocksPerSm, bool kPreintegrate>
+template <class Sampling, int BlocksPerSm, bool kPreintegrate, bool kShade>
 __global__ void __launch_bounds__(kRenderBlockThreads, BlocksPerSm)
     renderKernel(SceneView scene, IntegratorSettings settings, CameraView camera, PixelTarget target,
                  int height, const uint64_t *crossingStart, const uint64_t *crossingKeys,
-                 SampleTotals *samples) {
+                 SampleTotals *samples, ShadingSettings shading) {
   const int x = int(blockIdx.x * blockDim.x + threadIdx.x);
   const int y = int(blockIdx.y * blockDim.y + threadIdx.y);
   uint32_t taken = 0; // pixels past the frame's edge take none, and still join the warp's sums below
@@ -56,8 +56,8 @@ __global__ void __launch_bounds__(kRenderBlockThreads, BlocksPerSm)
     if (crossingStart)
       crossings =
           pixelCrossings(crossingStart, crossingKeys, uint64_t(y) * uint64_t(target.width) + uint64_t(x));
-    const RayResult result =
-        integrateRay<Sampling, kPreintegrate>(scene, settings, camera.ray(x, y), hint, crossings);
+    const RayResult result = integrateRay<Sampling, kPreintegrate, kShade>(scene, settings, camera.ray(x, y),
+                                                                           hint, crossings, {}, &shading);
     target.store(x, y, result);
     taken = result.samples;
   }
@@ -75,12 +75,18 @@ __global__ void __launch_bounds__(kRenderBlockThreads, BlocksPerSm)
   }
 }
 
-/// The render kernel for `Sampling`, the marching or the skipping modes' block count, and the compositing.
-template <class Sampling> auto chooseRenderKernel(bool skipping, bool preintegrate) {
-  return preintegrate ? (skipping ? renderKernel<Sampling, kSkippingBlocksPerSm, true>
-                                  : renderKernel<Sampling, kMarchingBlocksPerSm, true>)
-                      : (skipping ? renderKernel<Sampling, kSkippingBlocksPerSm, false>
-                                  : renderKernel<Sampling, kMarchingBlocksPerSm, false>);
+/// The render kernel for `Sampling`, the marching or the skipping modes' block count, the compositing and
+/// the shading.
+template <class Sampling, bool kShade> auto chooseRenderKernel(bool skipping, bool preintegrate) {
+  return preintegrate ? (skipping ? renderKernel<Sampling, kSkippingBlocksPerSm, true, kShade>
+                                  : renderKernel<Sampling, kMarchingBlocksPerSm, true, kShade>)
+                      : (skipping ? renderKernel<Sampling, kSkippingBlocksPerSm, false, kShade>
+                                  : renderKernel<Sampling, kMarchingBlocksPerSm, false, kShade>);
+}
+
+template <class Sampling> auto chooseRenderKernel(bool skipping, bool preintegrate, bool shade) {
+  return shade ? chooseRenderKernel<Sampling, true>(skipping, preintegrate)
+               : chooseRenderKernel<Sampling, false>(skipping, preintegrate);
 }
 
 } // namespace
@@ -123,6 +129,7 @@ struct CudaBackend::Impl {
   DeviceBuffer<Vec3f> points;
   DeviceBuffer<uint32_t> tets, pyramids, wedges, hexes;
   DeviceBuffer<float> values;
+  DeviceBuffer<Vec3f> gradients; // per point, for shaded frames
   uint64_t pointCount = 0;
   DeviceAcceleration accel;
   double buildMs = 0.0;
@@ -262,12 +269,21 @@ uint32_t CudaBackend::setField(const MeshView &view) {
   return d.tf ? d.metadata.update(*d.tf, d.scene.partitions) : 0;
 }
 
+void CudaBackend::setGradients(const Vec3f *gradients, uint64_t count) {
+  Impl &d = *impl_;
+  if (gradients)
+    d.gradients.upload(gradients, count);
+  else
+    d.gradients.release();
+}
+
 PartitionMetadata CudaBackend::metadata() const {
   return impl_->metadata.download(impl_->scene.partitions.count);
 }
 
 SampleTotals CudaBackend::render(const CameraView &camera, const IntegratorSettings &settings,
-                                 const PixelTarget &target, double &kernelMs) {
+                                 const ShadingSettings &shading, const PixelTarget &target,
+                                 double &kernelMs) {
   Impl &d = *impl_;
   UVR_CUDA_CHECK(cudaSetDevice(d.device));
   const int height = camera.height;
@@ -302,12 +318,17 @@ SampleTotals CudaBackend::render(const CameraView &camera, const IntegratorSetti
   if (crossings)
     d.crossings.find(d.scene.mesh, d.accel.boundaryFaceList, deviceCamera, pixels);
   const uint64_t *crossingStart = crossings ? d.crossings.start() : nullptr;
-  const auto kernel = d.accel.cellNeighbors.size() > 0
-                          ? chooseRenderKernel<DeviceCellWalkSampling>(skipping, settings.preintegrate)
-                          : chooseRenderKernel<DeviceSampling>(skipping, settings.preintegrate);
+  if (settings.shade && d.gradients.size() == 0)
+    throw Error("a shaded frame needs the field's gradients");
+  ShadingSettings lit = shading;
+  lit.gradients = d.gradients.data();
+  const auto kernel =
+      d.accel.cellNeighbors.size() > 0
+          ? chooseRenderKernel<DeviceCellWalkSampling>(skipping, settings.preintegrate, settings.shade)
+          : chooseRenderKernel<DeviceSampling>(skipping, settings.preintegrate, settings.shade);
   UVR_CUDA_CHECK(cudaEventRecord(d.renderStart));
   kernel<<<grid, block>>>(d.scene, settings, deviceCamera, device, height, crossingStart, d.crossings.keys(),
-                          d.sampleTotals.data());
+                          d.sampleTotals.data(), lit);
   UVR_CUDA_CHECK(cudaGetLastError());
   UVR_CUDA_CHECK(cudaEventRecord(d.kernelEnd));
   // The frame comes back through pinned memory, piece by piece, each copied on all cores into the caller's
@@ -380,8 +401,8 @@ size_t CudaBackend::deviceMemoryBytes() const {
 size_t CudaBackend::deviceSceneBytes() const {
   const Impl &d = *impl_;
   return d.points.bytes() + d.tets.bytes() + d.pyramids.bytes() + d.wedges.bytes() + d.hexes.bytes() +
-         d.values.bytes() + d.accel.bytes() + d.metadata.bytes() + d.tfTable.bytes() + d.tfPrefixSum.bytes() +
-         d.tfPrefixSquares.bytes() + d.tfOpacityMax.bytes() + d.tfExtinction.bytes() +
+         d.values.bytes() + d.gradients.bytes() + d.accel.bytes() + d.metadata.bytes() + d.tfTable.bytes() +
+         d.tfPrefixSum.bytes() + d.tfPrefixSquares.bytes() + d.tfOpacityMax.bytes() + d.tfExtinction.bytes() +
          d.tfExtinctionIntegral.bytes();
 }
 

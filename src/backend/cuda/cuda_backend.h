@@ -37,6 +37,8 @@ public:
   /// Uploads the field of `view` (host pointers, same points and cells) and its partitions' value ranges,
   /// computed on the host, and recomputes the metadata on the GPU.
   uint32_t setField(const MeshView &view) override;
+  /// Uploads the field's gradient per point, for shaded frames.
+  void setGradients(const Vec3f *gradients, uint64_t count) override;
   /// Copies the metadata of the last setTransferFunction back, for checks against the host's.
   PartitionMetadata metadata() const override;
   /// Copies the acceleration data the GPU built back, for checks against the host's builds.
@@ -49,8 +51,8 @@ public:
 
   /// Renders into `target`'s host buffers (those null are not copied back); `kernelMs`: the frame's
   /// kernels on the GPU (crossings pass and render kernel), without the copies.
-  SampleTotals render(const CameraView &camera, const IntegratorSettings &settings, const PixelTarget &target,
-                      double &kernelMs) override;
+  SampleTotals render(const CameraView &camera, const IntegratorSettings &settings,
+                      const ShadingSettings &shading, const PixelTarget &target, double &kernelMs) override;
 
   /// Device memory held: the scene alone (mesh, field, acceleration, partitions, transfer function), and all
   /// of it including the frame buffers.
