@@ -31,17 +31,23 @@ bool isExodus(const std::string &extension) {
   return extension == ".e" || extension == ".ex2" || extension == ".exo" || extension == ".g";
 }
 
-/// The files of each time step of a series, in time order; empty when `path` is a single file.
-using Series = std::vector<std::vector<std::string>>;
-
-Series readPvd(const std::string &path) {
-  // Through readFile, which refuses what is not a regular file (a FIFO) before blocking on it.
-  FileBuffer file = readFile(path);
-  pugi::xml_document doc;
+/// Reads `path` into `file` and parses it in place into `doc`, whose nodes point into `file`. Through
+/// readFile, which refuses what is not a regular file (a FIFO) before blocking on it.
+void parseXmlFile(const std::string &path, FileBuffer &file, pugi::xml_document &doc) {
+  file = readFile(path);
   const pugi::xml_parse_result result = doc.load_buffer_inplace(file.data.data(), file.size);
   if (!result)
     throw Error(path, "byte " + std::to_string(std::max<ptrdiff_t>(result.offset, 0)),
                 std::string("malformed XML: ") + result.description());
+}
+
+/// The files of each time step of a series, in time order; empty when `path` is a single file.
+using Series = std::vector<std::vector<std::string>>;
+
+Series readPvd(const std::string &path) {
+  FileBuffer file;
+  pugi::xml_document doc;
+  parseXmlFile(path, file, doc);
   const pugi::xml_node collection = doc.child("VTKFile").child("Collection");
   if (std::string_view(doc.child("VTKFile").attribute("type").value()) != "Collection" || !collection)
     throw Error(path, "", "expected <VTKFile type=\"Collection\"> with a <Collection>");
@@ -85,12 +91,9 @@ Series readPvd(const std::string &path) {
 
 /// The pieces a ParaView partitioned file (.pvtu) names, in its order.
 std::vector<std::string> readPvtu(const std::string &path) {
-  FileBuffer file = readFile(path);
+  FileBuffer file;
   pugi::xml_document doc;
-  const pugi::xml_parse_result result = doc.load_buffer_inplace(file.data.data(), file.size);
-  if (!result)
-    throw Error(path, "byte " + std::to_string(std::max<ptrdiff_t>(result.offset, 0)),
-                std::string("malformed XML: ") + result.description());
+  parseXmlFile(path, file, doc);
   const pugi::xml_node grid = doc.child("VTKFile").child("PUnstructuredGrid");
   if (std::string_view(doc.child("VTKFile").attribute("type").value()) != "PUnstructuredGrid" || !grid)
     throw Error(path, "", "expected <VTKFile type=\"PUnstructuredGrid\"> with a <PUnstructuredGrid>");
