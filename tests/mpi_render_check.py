@@ -4,6 +4,7 @@ tet brain, disk_out_ref (hexahedra) and a mixed-element mesh, from outside the m
 first split plane; and a rank that cannot open its file ends every rank with status 2.
 
 Usage: mpi_render_check.py UVR_BINARY MPIEXEC SOURCE_DIR SHARED_DATA_DIR
+Options appended to every render, e.g. `--backend cuda` for one rank per GPU: $UVR_MPI_CHECK_OPTIONS.
 """
 import json
 import os
@@ -22,6 +23,7 @@ MODES = ("reference", "skip", "adaptive", "full")
 LEAST_SSIM = {"reference": 0.997, "skip": 0.997, "adaptive": 0.99, "full": 0.99}
 LEAST_SSIM_TIED = {"reference": 0.997, "skip": 0.997, "adaptive": 0.88, "full": 0.88}  # the mixed mesh
 SIZE = "96x96"
+EXTRA = os.environ.get("UVR_MPI_CHECK_OPTIONS", "").split()
 ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
            OMPI_MCA_rmaps_base_oversubscribe="1")
 
@@ -131,7 +133,7 @@ def main():
             }
             for view, options in views.items():
                 for mode in MODES:
-                    command = [uvr, "render", mesh, "--mode", mode, "--size", SIZE] + options
+                    command = [uvr, "render", mesh, "--mode", mode, "--size", SIZE] + options + EXTRA
                     single = out("single.png")
                     run(command + ["-o", single])
                     for ranks in (2, 4):

@@ -6,6 +6,7 @@
 #include <uvr/mesh.h>
 #include <uvr/renderer.h>
 #include <uvr/settings.h>
+#include <uvr/system.h>
 
 #include <gtest/gtest.h>
 
@@ -173,6 +174,16 @@ TEST(DefaultTransferRange, WidensAConstantField) {
   EXPECT_FLOAT_EQ(0.5f * (constant.min + constant.max), 5.f);
   const ValueRange large = defaultTransferRange({1e9f, 1e9f});
   EXPECT_LT(large.min, large.max); // wide enough to survive float rounding
+}
+
+TEST(SetThreadCount, LimitsTheLoopsAndLiftsTheLimit) {
+  const int all = threadCount();
+  setThreadCount(1);
+  EXPECT_EQ(threadCount(), 1);
+  setThreadCount(0);
+  EXPECT_EQ(threadCount(), all);
+  EXPECT_THROW(setThreadCount(-1), Error);
+  EXPECT_EQ(threadCount(), all);
 }
 
 } // namespace

@@ -34,6 +34,8 @@ public:
   int size() const { return size_; }
   /// The rank among those on this node: which GPU it takes.
   int localRank() const { return localRank_; }
+  /// The ranks on this node: they share its cores.
+  int nodeSize() const { return nodeSize_; }
 
   /// Runs `work` on every rank, then agrees on its success: where it threw on any rank, rank 0 prints the
   /// lowest such rank's message and every rank ends with status 2 (no rank is left waiting).
@@ -49,11 +51,15 @@ public:
 
   /// Composites every rank's premultiplied RGBA image (`width` x `height`, 4 floats a pixel) front to back
   /// in `order` (ranks, front first) by direct send: each rank composites a band of rows from every rank's
-  /// part of it, and rank 0 gathers the bands into `rgba`. Returns the bytes this rank sent.
+  /// part of it, and rank 0 gathers the bands into `rgba`. What travels is the rectangle of each band that
+  /// holds colour, 16 bits a channel. Returns the bytes this rank sent.
   uint64_t composite(std::vector<float> &rgba, int width, int height, const std::vector<int> &order);
 
 private:
-  int rank_ = 0, size_ = 1, localRank_ = 0;
+  int rank_ = 0, size_ = 1, localRank_ = 0, nodeSize_ = 1;
+  // The composite's buffers, kept across frames: fresh pages each frame cost more than the copies.
+  std::vector<uint16_t> sent_, received_;
+  std::vector<float> band_;
 };
 
 } // namespace uvr

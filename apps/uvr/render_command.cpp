@@ -25,6 +25,7 @@
 #include <fstream>
 #include <memory>
 #include <optional>
+#include <thread>
 
 namespace uvr {
 
@@ -145,6 +146,9 @@ void runRender(const RenderCommandOptions &o) {
 void runRenderParallel(const RenderCommandOptions &o) {
   MpiGroup group;
   const bool first = group.rank() == 0;
+  // The ranks on a node share its cores: each takes its share, as a launcher that binds them gives it.
+  setThreadCount(
+      std::min(threadCount(), std::max(1, int(std::thread::hardware_concurrency()) / group.nodeSize())));
   FrameSettings settings;
   ColorMap colorMap;
   group.step([&] {
@@ -201,7 +205,7 @@ void runRenderParallel(const RenderCommandOptions &o) {
   settings.keepSamplesPerPixel = !o.heatmap.empty();
   settings.keepPremultipliedRgba = true;
   const std::vector<int> order = regions.frontToBack(camera.eye);
-  std::vector<double> frameTimes, rankTimes, compositeTimes;
+  std::vector<double> frameTimes, rankTimes, rankKernelTimes, compositeTimes;
   FrameResult frame;
   double tfUpdateMs = 0.0;
   uint64_t sentBytes = 0;
@@ -212,6 +216,8 @@ void runRenderParallel(const RenderCommandOptions &o) {
     if (i == 0)
       tfUpdateMs = frame.stats.tfUpdateMs;
     rankTimes.push_back(frame.stats.renderMs);
+    rankKernelTimes.push_back(frame.stats.gpuKernelMs);
+    group.barrier(); // the composite's time, not the wait for the slowest rank's render
     const Timer compositeTimer;
     sentBytes = group.composite(frame.premultipliedRgba, settings.width, settings.height, order);
     compositeTimes.push_back(compositeTimer.milliseconds());
@@ -221,6 +227,8 @@ void runRenderParallel(const RenderCommandOptions &o) {
   // Every rank takes part in the sums; rank 0 reports them.
   FrameStats stats = frame.stats;
   const std::vector<double> rankRenderMs = group.gather(median(rankTimes));
+  const std::vector<double> rankKernelMs = group.gather(median(rankKernelTimes));
+  const std::vector<double> rankSamples = group.gather(double(stats.samplesTotal));
   const double compositeMs = group.maxOf(median(compositeTimes));
   const double frameMs = group.maxOf(median(frameTimes));
   const uint64_t compositeBytes = group.sumOf(sentBytes);
@@ -260,6 +268,9 @@ void runRenderParallel(const RenderCommandOptions &o) {
       json["frames"] = o.frames;
       json["ranks"] = ranks;
       json["rank_render_ms"] = rankRenderMs;
+      json["rank_samples"] = rankSamples; // with rank_render_ms, the load balance
+      if (settings.backend == Backend::Cuda)
+        json["rank_gpu_kernel_ms"] = rankKernelMs;
       json["composite_ms"] = compositeMs;
       json["composite_bytes"] = compositeBytes;
       // Each rank's region within the mesh's bounds: where the split planes lie.

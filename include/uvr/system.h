@@ -9,6 +9,10 @@ namespace uvr {
 
 /// The threads the library's parallel loops use (all cores unless the process limits them).
 int threadCount();
+/// Limits the threads of every parallel loop in the process from now on, the library's and any other on
+/// the same TBB (0: all cores again): one of several processes on a node takes its share of the cores.
+/// Throws uvr::Error for a negative count.
+void setThreadCount(int threads);
 
 /// The CUDA GPUs this process sees: 0 without the CUDA backend or a GPU.
 int cudaDeviceCount();

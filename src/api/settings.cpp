@@ -6,10 +6,13 @@
 #include <uvr/settings.h>
 #include <uvr/system.h>
 
+#include <tbb/global_control.h>
 #include <tbb/info.h>
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
+#include <mutex>
 #include <string>
 #include <utility>
 
@@ -144,7 +147,29 @@ void validateSettings(const FrameSettings &s) {
     throw Error("shininess must be a finite number >= 1; got " + std::to_string(s.shininess));
 }
 
-int threadCount() { return tbb::info::default_concurrency(); }
+namespace {
+std::mutex threadLimitMutex;
+std::unique_ptr<tbb::global_control> threadLimit;
+} // namespace
+
+int threadCount() {
+  const std::lock_guard lock(threadLimitMutex);
+  const int all = tbb::info::default_concurrency();
+  return threadLimit
+             ? std::min(all,
+                        int(tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism)))
+             : all;
+}
+
+void setThreadCount(int threads) {
+  if (threads < 0)
+    throw Error("a thread count must not be negative; got " + std::to_string(threads));
+  const std::lock_guard lock(threadLimitMutex);
+  threadLimit.reset();
+  if (threads > 0)
+    threadLimit =
+        std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, size_t(threads));
+}
 
 int cudaDeviceCount() {
 #ifdef UVR_HAVE_CUDA
