@@ -60,6 +60,7 @@ TEST_F(ExodusReader, BlocksOfEveryVolumeType) {
   EXPECT_EQ(std::vector<int64_t>(grid.connectivity.end() - 4, grid.connectivity.end()),
             (std::vector<int64_t>{0, 1, 3, 13}));
 
+  EXPECT_EQ(timeStepCount(path), 3);
   for (int step = 0; step < 3; ++step) {
     Mesh mesh = loadMesh(path, {step});
     EXPECT_EQ(mesh.points.size(), 20u);

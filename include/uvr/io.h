@@ -19,8 +19,7 @@ struct SaveOptions {
   bool compress = false;
 };
 
-/// The number of time steps `path` holds: of a series or a Gmsh file's data; 1 otherwise (Exodus too, for
-/// now).
+/// The number of time steps `path` holds: of a series, an Exodus file or a Gmsh file's data; 1 otherwise.
 int timeStepCount(const std::string &path);
 
 } // namespace uvr

@@ -213,6 +213,12 @@ public:
   ExodusReader(const ExodusReader &) = delete;
   ExodusReader &operator=(const ExodusReader &) = delete;
 
+  /// The file's time steps: 1 for a mesh without results, which still renders as one step.
+  int timeStepCount() {
+    open();
+    return int(std::clamp<uint64_t>(dimension("time_step", false), 1, uint64_t(INT32_MAX)));
+  }
+
   UnstructuredGrid read() {
     open();
     UnstructuredGrid grid;
@@ -655,15 +661,22 @@ UnstructuredGrid readExodus(const std::string &path, int timeStep) {
   return ExodusReader(path, timeStep).read();
 }
 
+int exodusTimeStepCount(const std::string &path) { return ExodusReader(path, 0).timeStepCount(); }
+
 } // namespace uvr
 
 #else
 
 namespace uvr {
 
-UnstructuredGrid readExodus(const std::string &path, int) {
+namespace {
+[[noreturn]] void refuseWithoutNetCdf(const std::string &path) {
   throw Error(path, "", "uvr was built without netCDF, so it cannot read Exodus II files");
 }
+} // namespace
+
+UnstructuredGrid readExodus(const std::string &path, int) { refuseWithoutNetCdf(path); }
+int exodusTimeStepCount(const std::string &path) { refuseWithoutNetCdf(path); }
 
 } // namespace uvr
 

@@ -291,6 +291,8 @@ int timeStepCount(const std::string &path) {
     readGmsh(path, {}, &steps);
     return steps;
   }
+  if (isExodus(lowerCaseExtension(path)))
+    return exodusTimeStepCount(path);
   return 1;
 }
 

@@ -30,6 +30,8 @@ UnstructuredGrid readGmsh(const std::string &path, const LoadOptions &options = 
 /// variables (per block, merged) at time step `timeStep` (0-based). Throws uvr::Error when uvr was built
 /// without netCDF.
 UnstructuredGrid readExodus(const std::string &path, int timeStep);
+/// The time steps of an Exodus II file (1 where it holds no results).
+int exodusTimeStepCount(const std::string &path);
 
 /// The binary format of Wald's umesh library (UMesh::saveTo): vertices, named per-vertex scalars and the
 /// cells of each type, little-endian, read straight into place. Cells are checked and wound as VTK expects;
