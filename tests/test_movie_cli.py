@@ -238,6 +238,9 @@ def test_video(uvr, tmp):
                  env={**os.environ, "PATH": failing})
     check("ffmpeg" in result.stderr and not os.path.exists(os.path.join(tmp, "w.mp4")) and
           os.path.exists(os.path.join(tmp, "w_0002.png")), f"a failing ffmpeg: {result.stderr.strip()}")
+    # One image has no frame rate: --fps there is said to do nothing, not silently dropped.
+    result = run(uvr, ["render", DISK, "--size", "8x8", "--fps", "12", "-o", os.path.join(tmp, "one.png")])
+    check("--fps" in result.stderr and "movie" in result.stderr, f"--fps on one image: {result.stderr.strip()}")
 
 
 def test_errors(uvr, tmp):

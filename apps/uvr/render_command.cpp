@@ -36,6 +36,7 @@ struct RenderCommandOptions {
   MovieOptions movie;
   int frames = 1;
   bool framesGiven = false;
+  bool fpsGiven = false;
   std::string output;
   std::string heatmap;
   std::string stats;
@@ -87,6 +88,9 @@ void runRender(const RenderCommandOptions &o) {
                 {o.output, o.heatmap, o.stats, o.framesGiven ? std::optional<int>(o.frames) : std::nullopt});
     return;
   }
+  if (o.fpsGiven)
+    std::fprintf(stderr, "uvr: note: --fps is the frame rate of a movie's video (--time-step A:B, --orbit, "
+                         "--camera-path); one image has none\n");
 
   const LoadedMesh loaded = loadForRendering(o.view);
   const VolumeMesh &mesh = loaded.mesh;
@@ -320,6 +324,7 @@ void addRenderCommand(CLI::App &app) {
   cmd->add_option("--stats", o.stats, "Write statistics as JSON");
   cmd->callback([options, cmd] {
     options->framesGiven = cmd->count("--frames") > 0;
+    options->fpsGiven = cmd->count("--fps") > 0;
     if (!startedByMpiLauncher())
       return runRender(*options);
 #ifdef UVR_HAS_MPI
