@@ -8,7 +8,10 @@
 
 #include <tbb/info.h>
 
+#include <sys/resource.h>
+
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <string>
 #include <utility>
@@ -75,6 +78,34 @@ Backend parseBackend(const std::string &name) {
     return Backend::Cuda;
   throw Error("unknown backend '" + name + "': expected cpu or cuda");
 }
+
+const char *memoryLayoutName(MemoryLayout layout) {
+  switch (layout) {
+  case MemoryLayout::Default:
+    return "default";
+  case MemoryLayout::Lean:
+    return "lean";
+  default:
+    return "auto";
+  }
+}
+
+MemoryLayout parseMemoryLayout(const std::string &name) {
+  if (name == "auto")
+    return MemoryLayout::Auto;
+  if (name == "default")
+    return MemoryLayout::Default;
+  if (name == "lean")
+    return MemoryLayout::Lean;
+  throw Error("unknown memory layout '" + name + "': expected auto, default or lean");
+}
+
+namespace {
+std::atomic<MemoryLayout> layoutSetting{MemoryLayout::Auto};
+} // namespace
+
+void setMemoryLayout(MemoryLayout layout) { layoutSetting = layout; }
+MemoryLayout memoryLayout() { return layoutSetting; }
 
 bool backendAvailable(Backend backend) {
 #ifdef UVR_HAVE_CUDA
@@ -145,6 +176,13 @@ void validateSettings(const FrameSettings &s) {
 }
 
 int threadCount() { return tbb::info::default_concurrency(); }
+
+uint64_t hostPeakRssBytes() {
+  rusage usage{};
+  if (getrusage(RUSAGE_SELF, &usage) != 0)
+    return 0;
+  return uint64_t(usage.ru_maxrss) * 1024; // kilobytes on Linux
+}
 
 int cudaDeviceCount() {
 #ifdef UVR_HAVE_CUDA
