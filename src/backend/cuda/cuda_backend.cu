@@ -246,6 +246,7 @@ CudaBackend::CudaBackend(const Mesh &hostMesh, const MeshView &mesh, uint32_t le
   scene = makeSceneView(onDevice, d.accel);
   d.metadata.link(scene, uint32_t(d.accel.partitions.nodes.size()));
   UVR_CUDA_CHECK(cudaDeviceSynchronize());
+  sampleDeviceMemory(); // what the build's kernels took at launch (their stacks) besides our allocations
   d.peakBytes = deviceMemoryPeak(d.device);
 }
 
