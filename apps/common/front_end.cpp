@@ -38,6 +38,8 @@ nlohmann::json frameStatsJson(const FrameStats &s) {
       {"range", {s.range.min, s.range.max}},
       {"backend", backendName(s.backend)},
       {"threads", s.threads},
+      {"host_peak_rss_bytes", s.hostPeakRssBytes},
+      {"memory_layout", memoryLayoutName(s.memoryLayout)},
       // One process: `uvr render` under mpirun replaces these with the ranks' (docs/cli.md).
       {"ranks", 1},
       {"rank_render_ms", {s.renderMs}},
@@ -48,6 +50,7 @@ nlohmann::json frameStatsJson(const FrameStats &s) {
     stats["device"] = s.device;
     stats["gpu_memory_bytes"] = s.gpuMemoryBytes;
     stats["gpu_scene_bytes"] = s.gpuSceneBytes;
+    stats["gpu_peak_bytes"] = s.gpuPeakBytes;
     nlohmann::json steps = nlohmann::json::object();
     for (const auto &[step, ms] : s.gpuBuildSteps)
       steps[step] = ms;

@@ -126,6 +126,13 @@ void addRenderOptions(CLI::App *cmd, RenderOptions &o, bool timeRanges) {
   cmd->add_option("--background", o.background, "Background colour R,G,B, each in [0, 1]")
       ->capture_default_str();
   cmd->add_option("--backend", o.backend, "cpu or cuda")->capture_default_str();
+  cmd->add_option_function<std::string>(
+         "--memory", [](const std::string &name) { setMemoryLayout(parseMemoryLayout(name)); },
+         "auto (default), default or lean: lean keeps no tet adjacency, seed grid or boundary faces and "
+         "finds "
+         "every sample's cell by the BVH (the same image, slower); auto is lean where the GPU's memory "
+         "would not hold the default")
+      ->check(CLI::IsMember({"auto", "default", "lean"}));
   cmd->add_flag("--shade", o.shade,
                 "Light the volume by the field's gradient (Blinn-Phong: ambient 0.2, diffuse 0.7, specular "
                 "0.2, shininess 16)");

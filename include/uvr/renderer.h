@@ -39,12 +39,17 @@ struct FrameStats {
   std::string field;
   ValueRange range; ///< what the transfer function spans
   Backend backend = Backend::Cpu;
-  int threads = 0; ///< of the host
+  int threads = 0;                                   ///< of the host
+  MemoryLayout memoryLayout = MemoryLayout::Default; ///< what the backend built (Default or Lean)
+  uint64_t hostPeakRssBytes = 0; ///< the process's peak resident memory so far (loading included)
   // CUDA only: empty or 0 on the CPU.
   std::string device;
   uint64_t gpuMemoryBytes = 0; ///< all the renderer holds on the GPU
   uint64_t gpuSceneBytes = 0;  ///< without the frame buffers
-  double gpuKernelMs = 0.0;    ///< the frame's GPU work, without the copies to the host
+  /// The device's peak memory in use (cudaMemGetInfo's total - free, the CUDA context and other processes
+  /// included) over the build and the frames so far.
+  uint64_t gpuPeakBytes = 0;
+  double gpuKernelMs = 0.0; ///< the frame's GPU work, without the copies to the host
   std::vector<std::pair<std::string, double>> gpuBuildSteps; ///< the GPU build's steps and their ms
 };
 

@@ -62,6 +62,18 @@ Backend parseBackend(const std::string &name);
 /// looked for when the backend is first prepared).
 bool backendAvailable(Backend backend);
 
+/// What a backend keeps beside the mesh to find each sample's cell (docs/design.md, "GPU memory").
+enum class MemoryLayout : uint8_t {
+  Auto,    ///< Lean where the CUDA backend's default build would not fit the GPU memory free; else Default
+  Default, ///< the tets' adjacency, the seed grid and the boundary faces too: samples walk from the last one
+  Lean     ///< without them: every sample's cell is found by the BVH; the same images, slower
+};
+
+/// auto, default or lean.
+const char *memoryLayoutName(MemoryLayout layout);
+/// Parses auto|default|lean; throws uvr::Error otherwise.
+MemoryLayout parseMemoryLayout(const std::string &name);
+
 /// A leaf size that asks for the default: the cell count / 256, at least 64 (about 256 partitions).
 constexpr uint32_t kAutoLeafSize = 0;
 

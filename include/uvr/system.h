@@ -1,6 +1,8 @@
 // What the library runs on: the threads its parallel loops use, and a wall-clock timer for statistics.
 #pragma once
 
+#include <uvr/settings.h>
+
 #include <chrono>
 #include <cstdint>
 #include <string>
@@ -14,11 +16,18 @@ int threadCount();
 /// Throws uvr::Error for a negative count.
 void setThreadCount(int threads);
 
+/// The most resident memory this process has held so far (getrusage's ru_maxrss), in bytes.
+uint64_t hostPeakRssBytes();
+
 /// The CUDA GPUs this process sees: 0 without the CUDA backend or a GPU.
 int cudaDeviceCount();
 /// Makes the CUDA backends prepared from now on run on GPU `ordinal` (GPU 0 by default, and where `ordinal`
 /// is not below cudaDeviceCount()): one process per GPU picks its own. Throws uvr::Error for a negative one.
 void setCudaDevice(int ordinal);
+
+/// Makes the backends prepared from now on build `layout` (MemoryLayout::Auto by default).
+void setMemoryLayout(MemoryLayout layout);
+MemoryLayout memoryLayout();
 
 /// The memory limit in bytes: what the library lets input inflate to (decompressed arrays, values a file
 /// declares but does not hold, frame buffers) before refusing it with uvr::Error. The default is 4 GiB, or

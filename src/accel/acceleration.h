@@ -48,7 +48,9 @@ using HostAcceleration = Acceleration<HostStorage>;
 
 /// Builds it all on the host with all cores, partitions of at most `leafSize` cells. The structures that only
 /// speed walks up (the other cells' adjacency, the tet records) are left out where they would take more than
-/// an eighth of the machine's memory.
-HostAcceleration buildHostAcceleration(const Mesh &mesh, const MeshView &view, uint32_t leafSize);
+/// an eighth of the machine's memory; `lean` (MemoryLayout::Lean) leaves out every walk's structure: the tet
+/// and cell adjacency, the seed grid, the boundary faces and the tet records.
+HostAcceleration buildHostAcceleration(const Mesh &mesh, const MeshView &view, uint32_t leafSize,
+                                       bool lean = false);
 
 } // namespace uvr

@@ -19,10 +19,13 @@ bool walkAidFits(uint64_t bytes) {
 
 } // namespace
 
-HostAcceleration buildHostAcceleration(const Mesh &mesh, const MeshView &view, uint32_t leafSize) {
+HostAcceleration buildHostAcceleration(const Mesh &mesh, const MeshView &view, uint32_t leafSize, bool lean) {
   HostAcceleration built;
   built.bvh = buildBvh(view);
   built.occupancy = buildOccupancyGrid(view);
+  built.partitions = buildPartitions(view, leafSize);
+  if (lean)
+    return built;
   built.tetNeighbors = buildTetNeighbors(mesh);
   const uint64_t otherCells = view.cellCount() - view.tetCount;
   if (walkAidFits(cellAdjacencyBytes(otherCells))) {
@@ -32,7 +35,6 @@ HostAcceleration buildHostAcceleration(const Mesh &mesh, const MeshView &view, u
   built.seeds = buildSeedGrid(view, built.tetNeighbors.empty() ? nullptr : built.tetNeighbors.data());
   if (!built.tetNeighbors.empty() && listsBoundaryFaces(view))
     built.boundaryFaceList = listBoundaryFaces(built.tetNeighbors);
-  built.partitions = buildPartitions(view, leafSize);
   if (!built.tetNeighbors.empty() && walkAidFits(view.tetCount * sizeof(TetAffine)))
     built.tetAffine = buildTetAffine(view);
   return built;

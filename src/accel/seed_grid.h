@@ -129,7 +129,7 @@ template <typename Storage> struct SeedGridArrays {
   VoxelGrid grid;
 
   SeedGridView view() const {
-    return {seeds.data(), dataOrNull(boundaryStart), boundaryFaces.data(), boundaryOctants.data(), grid};
+    return {dataOrNull(seeds), dataOrNull(boundaryStart), boundaryFaces.data(), boundaryOctants.data(), grid};
   }
   template <typename A, typename B, typename F> static void forEachMember(A &a, B &b, F &&f) {
     f(a.seeds, b.seeds);

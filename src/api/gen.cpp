@@ -33,11 +33,13 @@ float VoxelVolume::threshold(const GenOptions &options) const {
 
 VolumeMesh VoxelVolume::generateMesh(const GenOptions &options, CellType type) const {
   const Volume &volume = impl_->volume;
-  if (type == CellType::Tetra)
-    return detail::Access::make(generateTetMesh(volume, options), volume.name);
-  if (type == CellType::Hexahedron)
-    return detail::Access::make(generateHexMesh(volume, options), volume.name);
-  throw Error("meshes are generated of tetrahedra or hexahedra only");
+  if (type != CellType::Tetra && type != CellType::Hexahedron)
+    throw Error("meshes are generated of tetrahedra or hexahedra only");
+  Mesh mesh = type == CellType::Tetra ? generateTetMesh(volume, options) : generateHexMesh(volume, options);
+  // In the order every loaded mesh is given, so that a .umesh written from it is read without reordering
+  // (which takes more memory than the mesh: UmeshReader).
+  orderSpatially(mesh);
+  return detail::Access::make(std::move(mesh), volume.name);
 }
 
 } // namespace uvr

@@ -259,10 +259,13 @@ void VolumeRenderer::render(const Camera &camera, const FrameSettings &settings,
   stats.range = {renderer.transferFunction().valueMin(), renderer.transferFunction().valueMax()};
   stats.backend = s.backend;
   stats.threads = threadCount();
+  stats.hostPeakRssBytes = hostPeakRssBytes();
+  stats.memoryLayout = renderer.layout(s.backend);
   if (s.backend == Backend::Cuda) {
     stats.device = renderer.deviceName();
     stats.gpuMemoryBytes = renderer.deviceMemoryBytes();
     stats.gpuSceneBytes = renderer.deviceSceneBytes();
+    stats.gpuPeakBytes = renderer.devicePeakBytes();
     stats.gpuKernelMs = frame.kernelMs;
     stats.gpuBuildSteps = renderer.deviceBuildSteps();
   }

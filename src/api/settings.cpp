@@ -9,7 +9,10 @@
 #include <tbb/global_control.h>
 #include <tbb/info.h>
 
+#include <sys/resource.h>
+
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <memory>
 #include <mutex>
@@ -78,6 +81,34 @@ Backend parseBackend(const std::string &name) {
     return Backend::Cuda;
   throw Error("unknown backend '" + name + "': expected cpu or cuda");
 }
+
+const char *memoryLayoutName(MemoryLayout layout) {
+  switch (layout) {
+  case MemoryLayout::Default:
+    return "default";
+  case MemoryLayout::Lean:
+    return "lean";
+  default:
+    return "auto";
+  }
+}
+
+MemoryLayout parseMemoryLayout(const std::string &name) {
+  if (name == "auto")
+    return MemoryLayout::Auto;
+  if (name == "default")
+    return MemoryLayout::Default;
+  if (name == "lean")
+    return MemoryLayout::Lean;
+  throw Error("unknown memory layout '" + name + "': expected auto, default or lean");
+}
+
+namespace {
+std::atomic<MemoryLayout> layoutSetting{MemoryLayout::Auto};
+} // namespace
+
+void setMemoryLayout(MemoryLayout layout) { layoutSetting = layout; }
+MemoryLayout memoryLayout() { return layoutSetting; }
 
 bool backendAvailable(Backend backend) {
 #ifdef UVR_HAVE_CUDA
@@ -169,6 +200,13 @@ void setThreadCount(int threads) {
   if (threads > 0)
     threadLimit =
         std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, size_t(threads));
+}
+
+uint64_t hostPeakRssBytes() {
+  rusage usage{};
+  if (getrusage(RUSAGE_SELF, &usage) != 0)
+    return 0;
+  return uint64_t(usage.ru_maxrss) * 1024; // kilobytes on Linux
 }
 
 int cudaDeviceCount() {

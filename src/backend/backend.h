@@ -45,6 +45,8 @@ public:
                               double &kernelMs) = 0;
 
   virtual uint32_t partitionCount() const = 0;
+  /// The layout built: Default or Lean, never Auto.
+  virtual MemoryLayout layout() const = 0;
   /// Milliseconds the acceleration build took (on a GPU, the mesh's upload excluded), in all and per step
   /// where the backend reports steps.
   virtual double buildMs() const = 0;
@@ -54,6 +56,10 @@ public:
   virtual std::string deviceName() const { return {}; }
   virtual size_t deviceSceneBytes() const { return 0; }
   virtual size_t deviceMemoryBytes() const { return 0; }
+  /// The most device memory in use (total - free, as cudaMemGetInfo gives it: the CUDA context and other
+  /// processes included) at any allocation of the build, later uploads or a frame since the backend was
+  /// made; 0 on the host.
+  virtual size_t devicePeakBytes() const { return 0; }
 
   /// Copies of what the backend holds, for checks against the host's builds: the acceleration data and the
   /// metadata under the current transfer function.
@@ -62,8 +68,9 @@ public:
 };
 
 /// Makes `backend` for `mesh` (`view` of its field), building its acceleration data with partitions of at
-/// most `leafSize` cells. Throws uvr::Error where the build has no such backend, or its device fails.
+/// most `leafSize` cells in `layout`. Throws uvr::Error where the build has no such backend, or its device
+/// fails.
 std::unique_ptr<RenderBackend> makeBackend(Backend backend, const Mesh &mesh, const MeshView &view,
-                                           uint32_t leafSize);
+                                           uint32_t leafSize, MemoryLayout layout);
 
 } // namespace uvr

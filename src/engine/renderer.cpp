@@ -86,7 +86,7 @@ void Renderer::prepare(Backend which) {
   std::unique_ptr<RenderBackend> &b = backends_[size_t(which)];
   if (b)
     return;
-  b = makeBackend(which, *mesh_, meshView_, leafSize());
+  b = makeBackend(which, *mesh_, meshView_, leafSize(), memoryLayout());
   if (gradientsBuilt_)
     b->setGradients(gradients_.data(), gradients_.size());
   if (tf_)
@@ -120,6 +120,10 @@ size_t Renderer::deviceMemoryBytes() const {
 }
 size_t Renderer::deviceSceneBytes() const {
   return prepared(Backend::Cuda) ? backend(Backend::Cuda).deviceSceneBytes() : 0;
+}
+MemoryLayout Renderer::layout(Backend which) const { return backend(which).layout(); }
+size_t Renderer::devicePeakBytes() const {
+  return prepared(Backend::Cuda) ? backend(Backend::Cuda).devicePeakBytes() : 0;
 }
 std::vector<std::pair<std::string, double>> Renderer::deviceBuildSteps() const {
   return prepared(Backend::Cuda) ? backend(Backend::Cuda).buildSteps()

@@ -98,6 +98,9 @@ public:
   std::string deviceName() const;
   size_t deviceMemoryBytes() const;
   size_t deviceSceneBytes() const;
+  size_t devicePeakBytes() const;
+  /// The memory layout `which` (prepared) built.
+  MemoryLayout layout(Backend which) const;
   std::vector<std::pair<std::string, double>> deviceBuildSteps() const;
   /// What the GPU built, and the metadata it computed, copied back.
   HostAcceleration deviceAcceleration() const;

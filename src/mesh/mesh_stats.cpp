@@ -2,10 +2,15 @@
 
 #include "mesh/cell.h"
 
+#include <tbb/blocked_range.h>
+#include <tbb/combinable.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
+#include <utility>
 #include <vector>
 
 namespace uvr {
@@ -71,36 +76,104 @@ double cellVolume(const MeshView &mesh, uint64_t cell) {
   return 0.0;
 }
 
+namespace {
+
+/// Doubles as unsigned integers of the same order.
+uint64_t orderedBits(double v) {
+  const uint64_t u = std::bit_cast<uint64_t>(v);
+  return u >> 63 ? ~u : u | (uint64_t(1) << 63);
+}
+
+double fromOrderedBits(uint64_t u) { return std::bit_cast<double>(u >> 63 ? u & ~(uint64_t(1) << 63) : ~u); }
+
+} // namespace
+
+double selectRank(uint64_t count, uint64_t rank, const std::function<double(uint64_t)> &value,
+                  uint64_t gatherAtMost) {
+  constexpr int kDigitBits = 16;
+  constexpr size_t kDigits = size_t(1) << kDigitBits;
+  uint64_t prefix = 0; // the digits found so far, of the value at `rank`
+  for (int shift = 64 - kDigitBits;; shift -= kDigitBits) {
+    // Of the values whose higher digits are the prefix, how many have each next digit.
+    auto inPrefix = [&](uint64_t bits) {
+      return shift + kDigitBits == 64 || bits >> (shift + kDigitBits) == prefix;
+    };
+    tbb::combinable<std::vector<uint64_t>> counts([] { return std::vector<uint64_t>(kDigits, 0); });
+    tbb::parallel_for(tbb::blocked_range<uint64_t>(0, count, 1 << 14),
+                      [&](const tbb::blocked_range<uint64_t> &r) {
+                        std::vector<uint64_t> &local = counts.local();
+                        for (uint64_t c = r.begin(); c < r.end(); ++c)
+                          if (const uint64_t bits = orderedBits(value(c)); inPrefix(bits))
+                            ++local[(bits >> shift) & (kDigits - 1)];
+                      });
+    std::vector<uint64_t> total(kDigits, 0);
+    counts.combine_each([&](const std::vector<uint64_t> &local) {
+      for (size_t d = 0; d < kDigits; ++d)
+        total[d] += local[d];
+    });
+    size_t digit = 0;
+    while (rank >= total[digit])
+      rank -= total[digit++];
+    prefix = prefix << kDigitBits | digit;
+    if (shift == 0)
+      return fromOrderedBits(prefix);
+    if (total[digit] > gatherAtMost)
+      continue;
+    // Few enough: gather them and select among them.
+    tbb::combinable<std::vector<double>> gathered;
+    tbb::parallel_for(tbb::blocked_range<uint64_t>(0, count, 1 << 14),
+                      [&](const tbb::blocked_range<uint64_t> &r) {
+                        std::vector<double> &local = gathered.local();
+                        for (uint64_t c = r.begin(); c < r.end(); ++c)
+                          if (const double v = value(c); orderedBits(v) >> shift == prefix)
+                            local.push_back(v);
+                      });
+    std::vector<double> values;
+    values.reserve(total[digit]);
+    gathered.combine_each(
+        [&](const std::vector<double> &local) { values.insert(values.end(), local.begin(), local.end()); });
+    auto it = values.begin() + std::ptrdiff_t(rank);
+    std::nth_element(values.begin(), it, values.end());
+    return *it;
+  }
+}
+
 VolumeStats volumeStats(const Mesh &mesh) {
   VolumeStats stats;
   const uint64_t count = mesh.cellCount();
   if (count == 0)
     return stats;
   const MeshView view = makeMeshView(mesh, -1);
-  std::vector<double> volumes(count);
-  tbb::parallel_for(uint64_t(0), count, [&](uint64_t c) { volumes[c] = cellVolume(view, c); });
-  const auto [lo, hi] = std::minmax_element(volumes.begin(), volumes.end());
-  stats.min = *lo;
-  stats.max = *hi;
-  auto at = [&](uint64_t rank) {
-    auto it = volumes.begin() + std::ptrdiff_t(rank);
-    std::nth_element(volumes.begin(), it, volumes.end());
-    return *it;
-  };
-  stats.median = at(count / 2);
-  stats.p1 = at(count / 100);
-  stats.p99 = at(count - 1 - count / 100);
+  // Selected by a radix select that computes the volumes again on each pass rather than keeping them (8
+  // bytes a cell).
+  auto volume = [&](uint64_t c) { return cellVolume(view, c); };
+  using Extremes = std::pair<double, double>;
+  const Extremes extremes = tbb::parallel_reduce(
+      tbb::blocked_range<uint64_t>(0, count, 1 << 14), Extremes{INFINITY, -INFINITY},
+      [&](const tbb::blocked_range<uint64_t> &r, Extremes e) {
+        for (uint64_t c = r.begin(); c < r.end(); ++c) {
+          const double v = volume(c);
+          e = {std::min(e.first, v), std::max(e.second, v)};
+        }
+        return e;
+      },
+      [](Extremes a, Extremes b) {
+        return Extremes{std::min(a.first, b.first), std::max(a.second, b.second)};
+      });
+  stats.min = extremes.first;
+  stats.max = extremes.second;
+  stats.median = selectRank(count, count / 2, volume);
+  stats.p1 = selectRank(count, count / 100, volume);
+  stats.p99 = selectRank(count, count - 1 - count / 100, volume);
   stats.medianPerTet = stats.median;
-  if (mesh.tetCount() != count) {
-    tbb::parallel_for(uint64_t(0), count, [&](uint64_t c) {
+  if (mesh.tetCount() != count)
+    stats.medianPerTet = selectRank(count, count / 2, [&](uint64_t c) {
       const CellType type = cellType(view, c);
-      volumes[c] /= type == CellType::Hexahedron ? 6.0
-                    : type == CellType::Wedge    ? 3.0
-                    : type == CellType::Pyramid  ? 2.0
-                                                 : 1.0;
+      return volume(c) / (type == CellType::Hexahedron ? 6.0
+                          : type == CellType::Wedge    ? 3.0
+                          : type == CellType::Pyramid  ? 2.0
+                                                       : 1.0);
     });
-    stats.medianPerTet = at(count / 2);
-  }
   return stats;
 }
 

@@ -4,12 +4,21 @@
 #include "mesh/mesh.h"
 #include "mesh/mesh_view.h"
 
+#include <cstdint>
+#include <functional>
+
 namespace uvr {
 
 /// Volume of one cell (absolute; hexahedra, wedges and pyramids through a split into tetrahedra).
 double cellVolume(const MeshView &mesh, uint64_t cell);
 
 VolumeStats volumeStats(const Mesh &mesh);
+
+/// The value of rank `rank` (< count) among value(0 .. count - 1), as std::nth_element finds it, without
+/// keeping the values: a radix select over their bits, each pass computing them again, until at most
+/// `gatherAtMost` are left to gather and select among.
+double selectRank(uint64_t count, uint64_t rank, const std::function<double(uint64_t)> &value,
+                  uint64_t gatherAtMost = uint64_t(1) << 22);
 
 /// Range of a field's finite values; {0, 0} when it has none.
 ValueRange valueRange(const ScalarField &field);

@@ -155,6 +155,7 @@ void orderSpatially(Mesh &mesh) {
         keys[c] = cellKeys.key(&cells[c * Corners], int(Corners), mesh.points, c);
     });
     const Buffer<uint32_t> order = sortedOrder(keys);
+    keys = Buffer<uint64_t>(); // freed before the cells are copied
     if (order.empty()) {
       numbering.place<Corners>(cells.data(), cells.data(), count, order);
     } else {

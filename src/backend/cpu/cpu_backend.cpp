@@ -14,9 +14,10 @@
 
 namespace uvr {
 
-CpuBackend::CpuBackend(const Mesh &mesh, const MeshView &view, uint32_t leafSize) : mesh_(view) {
+CpuBackend::CpuBackend(const Mesh &mesh, const MeshView &view, uint32_t leafSize, MemoryLayout layout)
+    : mesh_(view), layout_(layout == MemoryLayout::Lean ? MemoryLayout::Lean : MemoryLayout::Default) {
   const Timer timer;
-  accel_ = buildHostAcceleration(mesh, view, leafSize);
+  accel_ = buildHostAcceleration(mesh, view, leafSize, layout_ == MemoryLayout::Lean);
   buildMs_ = timer.milliseconds();
 }
 

@@ -10,7 +10,9 @@ namespace uvr {
 class CpuBackend final : public RenderBackend {
 public:
   /// Builds the acceleration data for `view` (of `mesh`, which must outlive the backend).
-  CpuBackend(const Mesh &mesh, const MeshView &view, uint32_t leafSize);
+  /// `layout`: Lean leaves the walks' structures out (Auto is Default on the host).
+  CpuBackend(const Mesh &mesh, const MeshView &view, uint32_t leafSize,
+             MemoryLayout layout = MemoryLayout::Default);
 
   uint32_t setTransferFunction(const TransferFunction &tf) override;
   uint32_t setField(const MeshView &view) override;
@@ -19,6 +21,7 @@ public:
                       const ShadingSettings &shading, const PixelTarget &target, double &kernelMs) override;
   uint32_t partitionCount() const override { return accel_.partitions.count(); }
   double buildMs() const override { return buildMs_; }
+  MemoryLayout layout() const override { return layout_; }
   HostAcceleration acceleration() const override { return accel_; }
   PartitionMetadata metadata() const override { return metadata_; }
 
@@ -33,6 +36,7 @@ private:
   const Vec3f *gradients_ = nullptr;
   HostAcceleration accel_;
   double buildMs_ = 0.0;
+  MemoryLayout layout_;
   std::optional<TransferFunction> tf_;
   PartitionMetadata metadata_;
 };

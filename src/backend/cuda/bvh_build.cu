@@ -10,12 +10,11 @@
 namespace uvr::gpu_build {
 namespace {
 
-__global__ void mortonKernel(const Vec3f *centroids, uint64_t cells, Vec3f origin, Vec3f scale,
-                             uint32_t *codes) {
+__global__ void mortonKernel(MeshView mesh, uint64_t cells, Vec3f origin, Vec3f scale, uint32_t *codes) {
   const uint64_t c = globalIndex();
   if (c >= cells)
     return;
-  const Vec3f p = centroids[c] - origin;
+  const Vec3f p = cellCentroid(mesh, c) - origin;
   auto cell = [](float v) { return uint32_t(fminf(fmaxf(v, 0.f), 1023.f)); };
   codes[c] = uint32_t(mortonCode(cell(p.x * scale.x), cell(p.y * scale.y), cell(p.z * scale.z)));
 }
@@ -44,11 +43,8 @@ struct RadixNode {
 
 __device__ inline bool keptInner(uint32_t first, uint32_t last) { return last - first + 1 > kLeafCells; }
 
-/// Internal node i's range and split; `kept` says whether it stays an inner node after collapsing.
-__global__ void radixTreeKernel(const uint32_t *codes, int64_t cells, RadixNode *radix, uint32_t *kept) {
-  const int64_t i = int64_t(globalIndex());
-  if (i >= cells - 1)
-    return;
+/// Internal node i's range and split, found where they are needed (twice) rather than kept: 12 bytes a cell.
+__device__ inline RadixNode radixNode(const uint32_t *codes, int64_t cells, int64_t i) {
   const int d = sharedPrefix(codes, cells, i, i + 1) > sharedPrefix(codes, cells, i, i - 1) ? 1 : -1;
   const int lowest = sharedPrefix(codes, cells, i, i - d);
   int64_t span = 2;
@@ -68,17 +64,28 @@ __global__ void radixTreeKernel(const uint32_t *codes, int64_t cells, RadixNode 
   } while (step > 1);
   const int64_t gamma = i + split * d + (d < 0 ? -1 : 0);
   const uint32_t first = uint32_t(i < j ? i : j), last = uint32_t(i < j ? j : i);
-  radix[i] = {first, last, uint32_t(gamma)};
-  kept[i] = keptInner(first, last);
+  return {first, last, uint32_t(gamma)};
 }
 
-/// Per kept inner node, its children's records (boxes aside) and, for kept children, where they are stored.
-__global__ void collapsedTreeKernel(int64_t cells, const RadixNode *radix, const uint32_t *kept,
-                                    const uint32_t *keptRank, BvhNode *nodes, uint32_t *parentSlot) {
+/// Whether internal node i stays an inner node after collapsing, as 1 or 0 (its rank once scanned).
+__global__ void keptKernel(const uint32_t *codes, int64_t cells, uint32_t *kept) {
   const int64_t i = int64_t(globalIndex());
-  if (i >= cells - 1 || !kept[i])
+  if (i >= cells - 1)
     return;
-  const RadixNode node = radix[i];
+  const RadixNode node = radixNode(codes, cells, i);
+  kept[i] = keptInner(node.first, node.last);
+}
+
+/// Whether internal node i is kept, from the exclusive scan of the flags (one entry more than nodes).
+__device__ inline bool isKept(const uint32_t *keptRank, int64_t i) { return keptRank[i + 1] != keptRank[i]; }
+
+/// Per kept inner node, its children's records (boxes aside) and, for kept children, where they are stored.
+__global__ void collapsedTreeKernel(const uint32_t *codes, int64_t cells, const uint32_t *keptRank,
+                                    BvhNode *nodes, uint32_t *parentSlot) {
+  const int64_t i = int64_t(globalIndex());
+  if (i >= cells - 1 || !isKept(keptRank, i))
+    return;
+  const RadixNode node = radixNode(codes, cells, i);
   const uint32_t ranges[2][2] = {{node.first, node.split}, {node.split + 1, node.last}};
   for (int side = 0; side < 2; ++side) {
     const uint32_t slot = 1 + 2 * keptRank[i] + uint32_t(side), first = ranges[side][0],
@@ -101,10 +108,10 @@ __device__ inline Box3f freshBounds(const BvhNode &node) {
 
 /// The boxes, from the leaves up: the second of a node's two children to arrive computes its box.
 __global__ void collapsedBoundsKernel(MeshView mesh, const uint32_t *cellIds, int64_t cells,
-                                      const uint32_t *kept, const uint32_t *keptRank, BvhNode *nodes,
-                                      const uint32_t *parentSlot, uint32_t *arrivals) {
+                                      const uint32_t *keptRank, BvhNode *nodes, const uint32_t *parentSlot,
+                                      uint32_t *arrivals) {
   const int64_t i = int64_t(globalIndex());
-  if (i >= cells - 1 || !kept[i])
+  if (i >= cells - 1 || !isKept(keptRank, i))
     return;
   const uint32_t self = keptRank[i];
   uint32_t leaves = 0;
@@ -140,33 +147,31 @@ __global__ void collapsedBoundsKernel(MeshView mesh, const uint32_t *cellIds, in
 } // namespace
 
 void DeviceBuilder::bvh() {
-  DeviceBuffer<uint32_t> codes, sortedCodes;
+  DeviceBuffer<uint32_t> codes; // sorted, once the cells are
   codes.resize(cells_);
   const Vec3f extent = meshBounds_.size();
   auto scaleOf = [](float e) { return e > 0.f ? 1024.f / e : 0.f; };
-  mortonKernel<<<cellBlocks(), kBlock>>>(centroids_.data(), cells_, meshBounds_.lower,
+  mortonKernel<<<cellBlocks(), kBlock>>>(mesh_, cells_, meshBounds_.lower,
                                          {scaleOf(extent.x), scaleOf(extent.y), scaleOf(extent.z)},
                                          codes.data());
   UVR_CUDA_CHECK(cudaGetLastError());
-  sortCells(codes, 30, sortedCodes, out_.bvh.cellIds);
+  sortCells(codes, 30, out_.bvh.cellIds);
   if (cells_ <= kLeafCells) { // one leaf
     const BvhNode root{meshBounds_, 0, uint32_t(cells_)};
     out_.bvh.nodes.upload(&root, 1);
     return;
   }
   const int64_t inner = int64_t(cells_) - 1;
-  DeviceBuffer<RadixNode> radix;
-  DeviceBuffer<uint32_t> kept, keptRank;
-  radix.resize(inner);
-  kept.resize(inner);
-  keptRank.resize(inner);
-  radixTreeKernel<<<blocksFor(inner, kBlock), kBlock>>>(sortedCodes.data(), int64_t(cells_), radix.data(),
-                                                        kept.data());
+  // The kept flags, scanned in place into ranks; the entry past the last node ends as the kept count.
+  DeviceBuffer<uint32_t> keptRank;
+  keptRank.resize(uint64_t(inner) + 1);
+  UVR_CUDA_CHECK(cudaMemset(keptRank.data() + inner, 0, sizeof(uint32_t)));
+  keptKernel<<<blocksFor(inner, kBlock), kBlock>>>(codes.data(), int64_t(cells_), keptRank.data());
   UVR_CUDA_CHECK(cudaGetLastError());
   scratch_.run([&](void *storage, size_t &bytes) {
-    return cub::DeviceScan::ExclusiveSum(storage, bytes, kept.data(), keptRank.data(), inner);
+    return cub::DeviceScan::ExclusiveSum(storage, bytes, keptRank.data(), keptRank.data(), inner + 1);
   });
-  const uint32_t keptCount = downloadOne(keptRank.data() + inner - 1) + downloadOne(kept.data() + inner - 1);
+  const uint32_t keptCount = downloadOne(keptRank.data() + inner);
   out_.bvh.nodes.resize(1 + 2 * uint64_t(keptCount));
   const BvhNode root{Box3f{}, 1, 0}; // its box comes from below
   UVR_CUDA_CHECK(cudaMemcpy(out_.bvh.nodes.data(), &root, sizeof root, cudaMemcpyHostToDevice));
@@ -174,12 +179,13 @@ void DeviceBuilder::bvh() {
   parentSlot.resize(keptCount);
   arrivals.resize(keptCount);
   UVR_CUDA_CHECK(cudaMemset(arrivals.data(), 0, arrivals.bytes()));
-  collapsedTreeKernel<<<blocksFor(inner, kBlock), kBlock>>>(
-      int64_t(cells_), radix.data(), kept.data(), keptRank.data(), out_.bvh.nodes.data(), parentSlot.data());
+  collapsedTreeKernel<<<blocksFor(inner, kBlock), kBlock>>>(codes.data(), int64_t(cells_), keptRank.data(),
+                                                            out_.bvh.nodes.data(), parentSlot.data());
   UVR_CUDA_CHECK(cudaGetLastError());
-  collapsedBoundsKernel<<<blocksFor(inner, kBlock), kBlock>>>(
-      mesh_, out_.bvh.cellIds.data(), int64_t(cells_), kept.data(), keptRank.data(), out_.bvh.nodes.data(),
-      parentSlot.data(), arrivals.data());
+  codes.release();
+  collapsedBoundsKernel<<<blocksFor(inner, kBlock), kBlock>>>(mesh_, out_.bvh.cellIds.data(), int64_t(cells_),
+                                                              keptRank.data(), out_.bvh.nodes.data(),
+                                                              parentSlot.data(), arrivals.data());
 }
 
 } // namespace uvr::gpu_build

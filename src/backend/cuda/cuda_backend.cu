@@ -134,6 +134,8 @@ struct CudaBackend::Impl {
   DeviceAcceleration accel;
   double buildMs = 0.0;
   std::vector<std::pair<std::string, double>> buildSteps;
+  size_t peakBytes = 0; // the device's peak seen by this backend (devicePeakBytes)
+  bool lean = false;
   DeviceMetadata metadata;
   std::optional<TransferFunctionRangeView> tf; // the function's tables on the device, once set
   DeviceBuffer<double> tfPrefixSum, tfPrefixSquares;
@@ -180,7 +182,13 @@ int cudaDevicesVisible() {
 void selectCudaDevice(int ordinal) { cudaDeviceChoice = ordinal; }
 int selectedCudaDevice() { return cudaDeviceChoice; }
 
-CudaBackend::CudaBackend(const Mesh &hostMesh, const MeshView &mesh, uint32_t leafSize)
+uint64_t defaultLayoutPeakBytes(uint64_t cells, uint64_t tets, uint64_t points) {
+  // The largest of the steps' (rounded up): the partitions' lists; the tet adjacency's rows; the BVH's
+  // temporaries, or at the end the grids and boundary faces, beside the adjacency.
+  return std::max({25 * cells, 32 * tets + 16 * points, 16 * tets + 24 * cells});
+}
+
+CudaBackend::CudaBackend(const Mesh &hostMesh, const MeshView &mesh, uint32_t leafSize, MemoryLayout layout)
     : impl_(std::make_unique<Impl>()) {
   const uint64_t pointCount = hostMesh.points.size();
   int devices = 0;
@@ -194,11 +202,25 @@ CudaBackend::CudaBackend(const Mesh &hostMesh, const MeshView &mesh, uint32_t le
   cudaDeviceProp properties{};
   UVR_CUDA_CHECK(cudaGetDeviceProperties(&properties, d.device));
   d.deviceName = properties.name;
+  resetDeviceMemoryPeak();
 
   UVR_CUDA_CHECK(cudaEventCreate(&d.kernelStart));
   UVR_CUDA_CHECK(cudaEventCreate(&d.kernelEnd));
   UVR_CUDA_CHECK(cudaEventCreate(&d.renderStart));
   d.pointCount = pointCount;
+  d.lean = layout == MemoryLayout::Lean;
+  if (layout == MemoryLayout::Auto) {
+    size_t freeBytes = 0, totalBytes = 0;
+    UVR_CUDA_CHECK(cudaMemGetInfo(&freeBytes, &totalBytes));
+    const uint64_t meshBytes =
+        sizeof(Vec3f) * pointCount +
+        sizeof(uint32_t) *
+            (4 * mesh.tetCount + 5 * mesh.pyramidCount + 6 * mesh.wedgeCount + 8 * mesh.hexCount) +
+        (mesh.values ? sizeof(float) * (mesh.cellCentered ? mesh.cellCount() : pointCount) : 0);
+    constexpr uint64_t kFrameReserve = uint64_t(1) << 30; // frame buffers, crossings, the kernels' stacks
+    d.lean = meshBytes + defaultLayoutPeakBytes(mesh.cellCount(), mesh.tetCount, pointCount) + kFrameReserve >
+             freeBytes;
+  }
   MeshView onDevice = mesh;
   onDevice.points = d.points.upload(mesh.points, pointCount);
   onDevice.tets = d.tets.upload(mesh.tets, 4 * mesh.tetCount);
@@ -209,11 +231,11 @@ CudaBackend::CudaBackend(const Mesh &hostMesh, const MeshView &mesh, uint32_t le
       mesh.values ? d.values.upload(mesh.values, mesh.cellCentered ? mesh.cellCount() : pointCount) : nullptr;
 
   const Timer timer;
-  d.buildSteps = buildOnDevice(onDevice, pointCount, leafSize, d.accel);
+  d.buildSteps = buildOnDevice(onDevice, pointCount, leafSize, d.lean, d.accel);
   const uint64_t otherCells = mesh.cellCount() - mesh.tetCount;
   size_t freeBytes = 0, totalBytes = 0;
   UVR_CUDA_CHECK(cudaMemGetInfo(&freeBytes, &totalBytes));
-  if (otherCells > 0 && cellAdjacencyBytes(otherCells) <= freeBytes / 8) {
+  if (!d.lean && otherCells > 0 && cellAdjacencyBytes(otherCells) <= freeBytes / 8) {
     const Timer adjacency;
     copyMember(d.accel.cellNeighbors, buildCellNeighbors(hostMesh));
     copyMember(d.accel.cellFacePlanes, buildCellFacePlanes(mesh));
@@ -224,6 +246,8 @@ CudaBackend::CudaBackend(const Mesh &hostMesh, const MeshView &mesh, uint32_t le
   scene = makeSceneView(onDevice, d.accel);
   d.metadata.link(scene, uint32_t(d.accel.partitions.nodes.size()));
   UVR_CUDA_CHECK(cudaDeviceSynchronize());
+  sampleDeviceMemory(); // what the build's kernels took at launch (their stacks) besides our allocations
+  d.peakBytes = deviceMemoryPeak(d.device);
 }
 
 CudaBackend::~CudaBackend() = default;
@@ -386,6 +410,9 @@ SampleTotals CudaBackend::render(const CameraView &camera, const IntegratorSetti
     else
       d.tiles = renderMs < d.rowsMs;
   }
+  // The kernel's stacks are taken at its launch, not by an allocation of ours.
+  sampleDeviceMemory();
+  d.peakBytes = std::max(d.peakBytes, deviceMemoryPeak(d.device));
   float kernelTime = 0.f;
   UVR_CUDA_CHECK(cudaEventElapsedTime(&kernelTime, d.kernelStart, d.kernelEnd));
   kernelMs = kernelTime;
@@ -398,6 +425,11 @@ size_t CudaBackend::deviceMemoryBytes() const {
          d.crossings.bytes();
 }
 
+size_t CudaBackend::devicePeakBytes() const {
+  // Uploads after the last frame (setField, setGradients) raised the device's peak only.
+  return std::max(impl_->peakBytes, deviceMemoryPeak(impl_->device));
+}
+
 size_t CudaBackend::deviceSceneBytes() const {
   const Impl &d = *impl_;
   return d.points.bytes() + d.tets.bytes() + d.pyramids.bytes() + d.wedges.bytes() + d.hexes.bytes() +
@@ -407,6 +439,7 @@ size_t CudaBackend::deviceSceneBytes() const {
 }
 
 uint32_t CudaBackend::partitionCount() const { return impl_->scene.partitions.count; }
+MemoryLayout CudaBackend::layout() const { return impl_->lean ? MemoryLayout::Lean : MemoryLayout::Default; }
 double CudaBackend::buildMs() const { return impl_->buildMs; }
 std::vector<std::pair<std::string, double>> CudaBackend::buildSteps() const { return impl_->buildSteps; }
 

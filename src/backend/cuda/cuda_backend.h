@@ -20,13 +20,19 @@ int cudaDevicesVisible();
 void selectCudaDevice(int ordinal);
 int selectedCudaDevice();
 
+/// About the most GPU memory the default layout's build takes for a mesh of `cells` cells, `tets` of them
+/// tets, and `points` points besides the mesh's own arrays (docs/design.md, "GPU memory").
+uint64_t defaultLayoutPeakBytes(uint64_t cells, uint64_t tets, uint64_t points);
+
 class CudaBackend final : public RenderBackend {
 public:
   /// Uploads `view` of `mesh` to the current GPU and builds the acceleration data there, with partitions of
   /// at most `leafSize` cells; throws uvr::Error when there is no GPU or memory runs out. The adjacency of
   /// the cells other than tets, for walks between samples, is built on the host and uploaded where it takes
-  /// no more than an eighth of the GPU memory left.
-  CudaBackend(const Mesh &mesh, const MeshView &view, uint32_t leafSize);
+  /// no more than an eighth of the GPU memory left. `layout` Auto builds Lean where the default layout's
+  /// build would not fit the GPU memory free (defaultLayoutPeakBytes).
+  CudaBackend(const Mesh &mesh, const MeshView &view, uint32_t leafSize,
+              MemoryLayout layout = MemoryLayout::Default);
   ~CudaBackend() override;
   CudaBackend(const CudaBackend &) = delete;
   CudaBackend &operator=(const CudaBackend &) = delete;
@@ -45,6 +51,7 @@ public:
   HostAcceleration acceleration() const override;
 
   uint32_t partitionCount() const override;
+  MemoryLayout layout() const override;
   /// Milliseconds the build on the GPU took, in all and per step (upload of the mesh excluded).
   double buildMs() const override;
   std::vector<std::pair<std::string, double>> buildSteps() const override;
@@ -58,6 +65,7 @@ public:
   /// of it including the frame buffers.
   size_t deviceSceneBytes() const override;
   size_t deviceMemoryBytes() const override;
+  size_t devicePeakBytes() const override;
   std::string deviceName() const override;
 
 private:

@@ -7,6 +7,7 @@
 #include <uvr/system.h>
 
 #include <cub/device/device_radix_sort.cuh>
+#include <cub/util_type.cuh>
 
 #include <algorithm>
 
@@ -22,14 +23,11 @@ __global__ void indicesKernel(uint64_t count, uint32_t *indices) {
 
 // ---- Cell boxes
 
-/// The centroid of every cell (partitionCentroid) and, reduced warp by warp into `bounds`, the mesh's box.
-__global__ void centroidsKernel(MeshView mesh, uint64_t cells, Vec3f *centroids, AtomicBox *bounds) {
+/// The mesh's box, reduced warp by warp into `bounds`.
+__global__ void boundsKernel(MeshView mesh, uint64_t cells, AtomicBox *bounds) {
   Box3f local;
-  for (uint64_t c = globalIndex(); c < cells; c += uint64_t(gridDim.x) * blockDim.x) {
-    const Box3f box = cellBounds(mesh, c);
-    centroids[c] = partitionCentroid(box);
-    local.extend(box);
-  }
+  for (uint64_t c = globalIndex(); c < cells; c += uint64_t(gridDim.x) * blockDim.x)
+    local.extend(cellBounds(mesh, c));
   float lo[3] = {local.lower.x, local.lower.y, local.lower.z},
         hi[3] = {local.upper.x, local.upper.y, local.upper.z};
   for (int offset = 16; offset > 0; offset /= 2)
@@ -50,14 +48,18 @@ void DeviceBuilder::build() {
     throw Error("more than 2^32 - 1 cells are not supported by the GPU build");
   if (leafSize_ == 0)
     throw Error("the partition leaf size must be at least 1");
-  Progress progress("building acceleration on the GPU", 7);
-  step("cell centroids", &DeviceBuilder::centroids, progress);
-  step("tet adjacency", &DeviceBuilder::tetAdjacency, progress);
-  step("occupancy grid", &DeviceBuilder::occupancy, progress);
-  step("seed grid", &DeviceBuilder::seeds, progress);
-  step("boundary faces", &DeviceBuilder::boundaryFaceList, progress);
-  step("point-location hierarchy", &DeviceBuilder::bvh, progress);
+  Progress progress("building acceleration on the GPU", lean_ ? 4 : 7);
+  // The step keeps its name from when the centroids were kept: it finds the mesh's box from the cells'.
+  step("cell centroids", &DeviceBuilder::bounds, progress);
   step("partitions", &DeviceBuilder::partitions, progress);
+  if (!lean_)
+    step("tet adjacency", &DeviceBuilder::tetAdjacency, progress);
+  step("point-location hierarchy", &DeviceBuilder::bvh, progress);
+  step("occupancy grid", &DeviceBuilder::occupancy, progress);
+  if (!lean_) {
+    step("seed grid", &DeviceBuilder::seeds, progress);
+    step("boundary faces", &DeviceBuilder::boundaryFaceList, progress);
+  }
   progress.finish();
 }
 
@@ -70,37 +72,41 @@ void DeviceBuilder::step(const char *name, void (DeviceBuilder::*work)(), Progre
   progress.advance(1);
 }
 
-void DeviceBuilder::centroids() {
-  centroids_.resize(cells_);
+void DeviceBuilder::bounds() {
   DeviceBuffer<AtomicBox> bounds;
   const AtomicBox empty = AtomicBox::empty();
   bounds.upload(&empty, 1);
   const unsigned blocks = std::min(cellBlocks(), 4096u); // each thread reduces several cells first
-  centroidsKernel<<<blocks, kBlock>>>(mesh_, cells_, centroids_.data(), bounds.data());
+  boundsKernel<<<blocks, kBlock>>>(mesh_, cells_, bounds.data());
   UVR_CUDA_CHECK(cudaGetLastError());
   meshBounds_ = downloadOne(bounds.data()).box();
 }
 
-void DeviceBuilder::sortCells(const DeviceBuffer<uint32_t> &keys, int bits,
-                              DeviceBuffer<uint32_t> &sortedKeys, DeviceBuffer<uint32_t> &order) {
-  if (cellIndices_.size() != cells_) {
-    cellIndices_.resize(cells_);
-    indicesKernel<<<cellBlocks(), kBlock>>>(cells_, cellIndices_.data());
-    UVR_CUDA_CHECK(cudaGetLastError());
-  }
-  sortedKeys.resize(cells_);
+void DeviceBuilder::sortCells(DeviceBuffer<uint32_t> &keys, int bits, DeviceBuffer<uint32_t> &order) {
   order.resize(cells_);
+  indicesKernel<<<cellBlocks(), kBlock>>>(cells_, order.data());
+  UVR_CUDA_CHECK(cudaGetLastError());
+  DeviceBuffer<uint32_t> keysOther, orderOther;
+  keysOther.resize(cells_);
+  orderOther.resize(cells_);
+  cub::DoubleBuffer<uint32_t> sortedKeys(keys.data(), keysOther.data()),
+      sortedOrder(order.data(), orderOther.data());
+  // A stable sort of the indices in order: ties stay by index.
   scratch_.run([&](void *storage, size_t &bytes) {
-    return cub::DeviceRadixSort::SortPairs(storage, bytes, keys.data(), sortedKeys.data(),
-                                           cellIndices_.data(), order.data(), int64_t(cells_), 0, bits);
+    return cub::DeviceRadixSort::SortPairs(storage, bytes, sortedKeys, sortedOrder, int64_t(cells_), 0, bits);
   });
+  if (sortedKeys.Current() != keys.data())
+    keys.swap(keysOther);
+  if (sortedOrder.Current() != order.data())
+    order.swap(orderOther);
 }
 
 } // namespace gpu_build
 
 std::vector<std::pair<std::string, double>> buildOnDevice(const MeshView &mesh, uint64_t pointCount,
-                                                          uint32_t leafSize, DeviceAcceleration &out) {
-  gpu_build::DeviceBuilder builder(mesh, pointCount, leafSize, out);
+                                                          uint32_t leafSize, bool lean,
+                                                          DeviceAcceleration &out) {
+  gpu_build::DeviceBuilder builder(mesh, pointCount, leafSize, lean, out);
   builder.build();
   return builder.stepMs();
 }

@@ -20,9 +20,11 @@ namespace uvr {
 using DeviceAcceleration = Acceleration<DeviceStorage>;
 
 /// Builds everything a ray reads besides the mesh and the transfer function, from `mesh` (device pointers;
-/// `pointCount` points), with partitions of at most `leafSize` cells where they can be split. Returns the
-/// milliseconds per step, in order, for reports.
+/// `pointCount` points), with partitions of at most `leafSize` cells where they can be split; `lean`: without
+/// the tet adjacency, the seed grid and the boundary faces (MemoryLayout::Lean). Returns the milliseconds per
+/// step, in order, for reports.
 std::vector<std::pair<std::string, double>> buildOnDevice(const MeshView &mesh, uint64_t pointCount,
-                                                          uint32_t leafSize, DeviceAcceleration &out);
+                                                          uint32_t leafSize, bool lean,
+                                                          DeviceAcceleration &out);
 
 } // namespace uvr

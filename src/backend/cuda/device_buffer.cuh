@@ -20,6 +20,14 @@ void checkCuda(cudaError_t status, const char *call, const char *file, int line)
 /// Throws uvr::Error saying how much memory was asked for and how much is free.
 [[noreturn]] void throwOutOfMemory(size_t bytes);
 
+/// The GPU memory in use on the current device now (total - free from cudaMemGetInfo: every allocation of
+/// every process, and the CUDA context), folded into that device's peak. Called after each allocation.
+size_t sampleDeviceMemory();
+/// Starts the current device's peak anew at what is in use now.
+void resetDeviceMemoryPeak();
+/// The highest sample on `device` since its last reset.
+size_t deviceMemoryPeak(int device);
+
 /// One device allocation, freed with its owner.
 template <typename T> class DeviceBuffer {
 public:
@@ -41,6 +49,7 @@ public:
       throwOutOfMemory(count * sizeof(T));
     }
     count_ = count;
+    sampleDeviceMemory();
   }
   /// Holds at least `count` elements afterwards, keeping the first `keep`; grows by half again at least, so
   /// that a buffer filled piece by piece is copied a few times only.

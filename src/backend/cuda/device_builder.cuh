@@ -7,6 +7,7 @@
 
 #include "backend/cuda/cuda_build.cuh"
 #include "core/progress.h"
+#include "mesh/cell.h"
 
 #include <cstdint>
 #include <cstring>
@@ -60,6 +61,12 @@ struct AtomicBox {
 
 __device__ inline uint64_t globalIndex() { return uint64_t(blockIdx.x) * blockDim.x + threadIdx.x; }
 
+/// Cell `c`'s centroid as the partitions and the BVH order cells by, from its box: computed where it is
+/// read rather than kept (12 bytes a cell).
+__device__ inline Vec3f cellCentroid(const MeshView &mesh, uint64_t c) {
+  return partitionCentroid(cellBounds(mesh, c));
+}
+
 template <typename T> T downloadOne(const T *device) {
   T value;
   UVR_CUDA_CHECK(cudaMemcpy(&value, device, sizeof(T), cudaMemcpyDeviceToHost));
@@ -69,8 +76,10 @@ template <typename T> T downloadOne(const T *device) {
 /// Builds `out` from the mesh a step at a time; each step is defined beside the kernels it launches.
 class DeviceBuilder {
 public:
-  DeviceBuilder(const MeshView &mesh, uint64_t pointCount, uint32_t leafSize, DeviceAcceleration &out)
-      : mesh_(mesh), cells_(mesh.cellCount()), pointCount_(pointCount), leafSize_(leafSize), out_(out) {}
+  DeviceBuilder(const MeshView &mesh, uint64_t pointCount, uint32_t leafSize, bool lean,
+                DeviceAcceleration &out)
+      : mesh_(mesh), cells_(mesh.cellCount()), pointCount_(pointCount), leafSize_(leafSize), lean_(lean),
+        out_(out) {}
 
   const std::vector<std::pair<std::string, double>> &stepMs() const { return stepMs_; }
 
@@ -81,31 +90,31 @@ private:
 
   unsigned cellBlocks() const { return blocksFor(cells_, kBlock); }
 
-  // The steps, in build's order.
-  void centroids();
+  // The steps, in build's order: those that need the most memory for the time they run come first, while
+  // little of what stays is built yet (docs/design.md, "GPU memory").
+  void bounds();
+  void partitions();
   void tetAdjacency();
+  void bvh();
   void occupancy();
   void seeds();
   /// Every boundary face, for the per-frame crossings: counted, then listed.
   void boundaryFaceList();
-  void bvh();
-  void partitions();
 
   /// Compressed rows of the boundary faces per voxel, as the host lists them: counted, offset by a scan, then
   /// filled (part of seeds).
   void boundaryFaces();
-  /// The cells' indices ordered by `keys` (their low `bits` bits; ties by index) into `order`, and the keys
-  /// in that order into `sortedKeys`.
-  void sortCells(const DeviceBuffer<uint32_t> &keys, int bits, DeviceBuffer<uint32_t> &sortedKeys,
-                 DeviceBuffer<uint32_t> &order);
+  /// The cells' indices ordered by `keys` (one per cell, their low `bits` bits; ties by index) into `order`;
+  /// `keys` is left sorted. Sorts in place between two buffers each, so that the sort takes no temporary
+  /// storage of its own beyond a few histograms.
+  void sortCells(DeviceBuffer<uint32_t> &keys, int bits, DeviceBuffer<uint32_t> &order);
 
   MeshView mesh_;
   uint64_t cells_, pointCount_;
   uint32_t leafSize_;
+  bool lean_; // no tet adjacency, seed grid or boundary faces (MemoryLayout::Lean)
   DeviceAcceleration &out_;
   std::vector<std::pair<std::string, double>> stepMs_;
-  DeviceBuffer<Vec3f> centroids_;
-  DeviceBuffer<uint32_t> cellIndices_; // 0, 1, 2, ...: what the sorts order
   Box3f meshBounds_;
   CubScratch scratch_;
 };

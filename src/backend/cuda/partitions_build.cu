@@ -26,10 +26,28 @@ struct LevelNode {
   __device__ bool goesAbove(uint64_t position) const { return position - start >= half(); }
 };
 
-__global__ void axisKeysKernel(const Vec3f *centroids, uint64_t cells, int axis, uint32_t *keys) {
+/// The node of a level (`count` nodes whose ranges of positions are disjoint and in order, as each level is
+/// made) that holds position `p`, or kSettled where none does: its cells reached their leaf before. Searched
+/// rather than kept per position (4 bytes a cell).
+__device__ inline uint32_t nodeAt(const LevelNode *level, uint32_t count, uint64_t p) {
+  uint32_t lo = 0, hi = count; // the first node that starts past p is in [lo, hi]
+  while (lo < hi) {
+    const uint32_t mid = lo + (hi - lo) / 2;
+    if (level[mid].start <= p)
+      lo = mid + 1;
+    else
+      hi = mid;
+  }
+  if (lo == 0)
+    return kSettled;
+  const LevelNode node = level[lo - 1];
+  return p - node.start < node.count ? lo - 1 : kSettled;
+}
+
+__global__ void axisKeysKernel(MeshView mesh, uint64_t cells, int axis, uint32_t *keys) {
   const uint64_t c = globalIndex();
   if (c < cells)
-    keys[c] = orderedBits(centroids[c][axis]);
+    keys[c] = orderedBits(cellCentroid(mesh, c)[axis]);
 }
 
 struct SortedLists {
@@ -37,9 +55,8 @@ struct SortedLists {
 };
 
 /// Decides per node of the level whether and where it splits, as the host's TreeBuilder::split.
-__global__ void classifyKernel(const LevelNode *level, uint32_t count, SortedLists lists,
-                               const Vec3f *centroids, uint32_t leafSize, int depth, KdNode *decisions,
-                               uint32_t *splits) {
+__global__ void classifyKernel(const LevelNode *level, uint32_t count, SortedLists lists, MeshView mesh,
+                               uint32_t leafSize, int depth, KdNode *decisions, uint32_t *splits) {
   const uint64_t i = globalIndex();
   if (i >= count)
     return;
@@ -49,10 +66,10 @@ __global__ void classifyKernel(const LevelNode *level, uint32_t count, SortedLis
   if (node.count > leafSize && depth < kMaxPartitionDepth) {
     Vec3f extent;
     for (int a = 0; a < 3; ++a)
-      extent[a] =
-          centroids[lists.axis[a][node.start + node.count - 1]][a] - centroids[lists.axis[a][node.start]][a];
+      extent[a] = cellCentroid(mesh, lists.axis[a][node.start + node.count - 1])[a] -
+                  cellCentroid(mesh, lists.axis[a][node.start])[a];
     const int axis = widestAxis(extent);
-    decision = {centroids[lists.axis[axis][node.start + node.count / 2]][axis], uint32_t(axis), 0};
+    decision = {cellCentroid(mesh, lists.axis[axis][node.start + node.count / 2])[axis], uint32_t(axis), 0};
     split = decision.split > node.space.lower[axis] && decision.split < node.space.upper[axis];
   }
   decisions[i] = decision;
@@ -86,35 +103,35 @@ __global__ void emitKernel(const LevelNode *level, uint32_t count, const KdNode 
 }
 
 /// Which side of its node's split each cell goes to: the upper half of the split axis's list goes above.
-__global__ void sideKernel(uint64_t cells, const uint32_t *positionNode, const LevelNode *level,
-                           const KdNode *decisions, const uint32_t *splits, SortedLists lists,
-                           uint8_t *above) {
+__global__ void sideKernel(uint64_t cells, const LevelNode *level, uint32_t count, const KdNode *decisions,
+                           const uint32_t *splits, SortedLists lists, uint8_t *above) {
   const uint64_t p = globalIndex();
   if (p >= cells)
     return;
-  const uint32_t s = positionNode[p];
+  const uint32_t s = nodeAt(level, count, p);
   if (s == kSettled || !splits[s])
     return;
   above[lists.axis[decisions[s].axis][p]] = level[s].goesAbove(p);
 }
 
-__global__ void aboveFlagsKernel(uint64_t cells, const uint32_t *positionNode, const uint32_t *splits,
-                                 const uint32_t *list, const uint8_t *above, uint32_t *flags) {
+__global__ void aboveFlagsKernel(uint64_t cells, const LevelNode *level, uint32_t count,
+                                 const uint32_t *splits, const uint32_t *list, const uint8_t *above,
+                                 uint32_t *flags) {
   const uint64_t p = globalIndex();
   if (p >= cells)
     return;
-  const uint32_t s = positionNode[p];
+  const uint32_t s = nodeAt(level, count, p);
   flags[p] = s != kSettled && splits[s] ? above[list[p]] : 0u;
 }
 
 /// The stable partition of one list: below before above within each splitting node, order kept on each side.
-__global__ void partitionListKernel(uint64_t cells, const uint32_t *positionNode, const LevelNode *level,
+__global__ void partitionListKernel(uint64_t cells, const LevelNode *level, uint32_t count,
                                     const uint32_t *splits, const uint32_t *list, const uint8_t *above,
                                     const uint32_t *aboveBefore, uint32_t *out) {
   const uint64_t p = globalIndex();
   if (p >= cells)
     return;
-  const uint32_t s = positionNode[p], cell = list[p];
+  const uint32_t s = nodeAt(level, count, p), cell = list[p];
   if (s == kSettled || !splits[s]) {
     out[p] = cell;
     return;
@@ -122,21 +139,6 @@ __global__ void partitionListKernel(uint64_t cells, const uint32_t *positionNode
   const LevelNode node = level[s];
   const uint32_t ones = aboveBefore[p] - aboveBefore[node.start];
   out[above[cell] ? node.start + node.half() + ones : uint32_t(p) - ones] = cell;
-}
-
-__global__ void advancePositionsKernel(uint64_t cells, uint32_t *positionNode, const LevelNode *level,
-                                       const uint32_t *splits, const uint32_t *splitRank) {
-  const uint64_t p = globalIndex();
-  if (p >= cells)
-    return;
-  const uint32_t s = positionNode[p];
-  if (s == kSettled)
-    return;
-  if (!splits[s]) {
-    positionNode[p] = kSettled;
-    return;
-  }
-  positionNode[p] = 2 * splitRank[s] + (level[s].goesAbove(p) ? 1u : 0u);
 }
 
 /// What a partition gathers from the cells whose boxes touch it, as ordered bits.
@@ -237,27 +239,22 @@ void DeviceBuilder::partitions() {
   const Box3f root = padded(meshBounds_, pad);
   out_.partitions.rootBounds = root;
 
-  // The three sorted lists, and their partitioned copies.
-  DeviceBuffer<uint32_t> lists[3], spare[3];
+  // The three sorted lists; a spare list that each partitioned list is written to, swapped with it; the
+  // sides of the cells; the count of cells going above before each position.
+  DeviceBuffer<uint32_t> lists[3], spare, aboveBefore;
+  DeviceBuffer<uint8_t> above;
   {
-    DeviceBuffer<uint32_t> keys, sortedKeys;
+    DeviceBuffer<uint32_t> keys;
     keys.resize(cells_);
     for (int axis = 0; axis < 3; ++axis) {
-      axisKeysKernel<<<cellBlocks(), kBlock>>>(centroids_.data(), cells_, axis, keys.data());
+      axisKeysKernel<<<cellBlocks(), kBlock>>>(mesh_, cells_, axis, keys.data());
       UVR_CUDA_CHECK(cudaGetLastError());
-      sortCells(keys, 32, sortedKeys, lists[axis]);
+      sortCells(keys, 32, lists[axis]);
     }
-    cellIndices_.release();
   }
-  for (auto &list : spare)
-    list.resize(cells_);
-  DeviceBuffer<uint32_t> positionNode, flags, aboveBefore;
-  DeviceBuffer<uint8_t> above;
-  positionNode.resize(cells_);
-  flags.resize(cells_);
+  spare.resize(cells_);
   aboveBefore.resize(cells_);
   above.resize(cells_);
-  UVR_CUDA_CHECK(cudaMemset(positionNode.data(), 0, positionNode.bytes()));
 
   DeviceBuffer<LevelNode> level, next;
   const LevelNode rootNode{0, uint32_t(cells_), root};
@@ -272,8 +269,8 @@ void DeviceBuilder::partitions() {
     decisions.grow(count, 0);
     splits.grow(count, 0);
     splitRank.grow(count, 0);
-    classifyKernel<<<blocksFor(count, kBlock), kBlock>>>(level.data(), count, sorted, centroids_.data(),
-                                                         leafSize_, depth, decisions.data(), splits.data());
+    classifyKernel<<<blocksFor(count, kBlock), kBlock>>>(level.data(), count, sorted, mesh_, leafSize_, depth,
+                                                         decisions.data(), splits.data());
     UVR_CUDA_CHECK(cudaGetLastError());
     scratch_.run([&](void *storage, size_t &bytes) {
       return cub::DeviceScan::ExclusiveSum(storage, bytes, splits.data(), splitRank.data(), int64_t(count));
@@ -292,31 +289,33 @@ void DeviceBuilder::partitions() {
     levelBase += count;
     leaves += newLeaves;
     if (splitting > 0) {
-      sideKernel<<<cellBlocks(), kBlock>>>(cells_, positionNode.data(), level.data(), decisions.data(),
-                                           splits.data(), sorted, above.data());
+      sideKernel<<<cellBlocks(), kBlock>>>(cells_, level.data(), count, decisions.data(), splits.data(),
+                                           sorted, above.data());
       UVR_CUDA_CHECK(cudaGetLastError());
       for (int axis = 0; axis < 3; ++axis) {
-        aboveFlagsKernel<<<cellBlocks(), kBlock>>>(cells_, positionNode.data(), splits.data(),
-                                                   lists[axis].data(), above.data(), flags.data());
+        // The flags, scanned in place.
+        aboveFlagsKernel<<<cellBlocks(), kBlock>>>(cells_, level.data(), count, splits.data(),
+                                                   lists[axis].data(), above.data(), aboveBefore.data());
         UVR_CUDA_CHECK(cudaGetLastError());
         scratch_.run([&](void *storage, size_t &bytes) {
-          return cub::DeviceScan::ExclusiveSum(storage, bytes, flags.data(), aboveBefore.data(),
+          return cub::DeviceScan::ExclusiveSum(storage, bytes, aboveBefore.data(), aboveBefore.data(),
                                                int64_t(cells_));
         });
-        partitionListKernel<<<cellBlocks(), kBlock>>>(cells_, positionNode.data(), level.data(),
-                                                      splits.data(), lists[axis].data(), above.data(),
-                                                      aboveBefore.data(), spare[axis].data());
+        partitionListKernel<<<cellBlocks(), kBlock>>>(cells_, level.data(), count, splits.data(),
+                                                      lists[axis].data(), above.data(), aboveBefore.data(),
+                                                      spare.data());
         UVR_CUDA_CHECK(cudaGetLastError());
-        lists[axis].swap(spare[axis]);
+        lists[axis].swap(spare);
       }
-      advancePositionsKernel<<<cellBlocks(), kBlock>>>(cells_, positionNode.data(), level.data(),
-                                                       splits.data(), splitRank.data());
-      UVR_CUDA_CHECK(cudaGetLastError());
     }
     level.swap(next);
     count = 2 * splitting;
   }
-  centroids_.release();
+  for (auto &list : lists)
+    list.release();
+  spare.release();
+  aboveBefore.release();
+  above.release();
 
   const uint32_t nodeCount = levelBase;
   out_.partitions.nodes.resize(nodeCount);
