@@ -4,10 +4,13 @@ tet brain, disk_out_ref (hexahedra) and a mixed-element mesh, from outside the m
 first split plane; and a rank that cannot open its file ends every rank with status 2.
 
 Usage: mpi_render_check.py UVR_BINARY MPIEXEC SOURCE_DIR SHARED_DATA_DIR
+SHARED_DATA_DIR holds source/ch2better.nii.gz (or ch2better.nii.gz). UVR_MPI_CHECK_OPTIONS in the environment (e.g. "--backend cuda")
+is appended to every render, single process and ranks alike: the same check with one GPU per rank.
 """
 import json
 import os
 import random
+import shlex
 import subprocess
 import sys
 import tempfile
@@ -24,9 +27,12 @@ LEAST_SSIM_TIED = {"reference": 0.997, "skip": 0.997, "adaptive": 0.88, "full": 
 SIZE = "96x96"
 ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
            OMPI_MCA_rmaps_base_oversubscribe="1")
+EXTRA = shlex.split(os.environ.get("UVR_MPI_CHECK_OPTIONS", ""))
 
 
 def run(command, expect=0, timeout=300):
+    if "render" in command:
+        command = command + EXTRA
     result = subprocess.run(command, capture_output=True, text=True, env=ENV, timeout=timeout)
     if result.returncode != expect:
         sys.exit(f"FAIL: {' '.join(command)} exited with {result.returncode}, expected {expect}:\n"
@@ -87,11 +93,18 @@ def write_mixed_mesh(path, n=6):
 
 def main():
     uvr, mpiexec, source, shared = sys.argv[1:5]
+    # The shared data folder as checkouts have it (source/ch2better.nii.gz), the GPU scripts' flat copy
+    # (shared-data/ch2better.nii.gz), or the volume itself.
+    candidates = [os.path.join(shared, "source", "ch2better.nii.gz"), os.path.join(shared, "ch2better.nii.gz"),
+                  shared]
+    volume = next((path for path in candidates if os.path.isfile(path)), None)
+    if volume is None:
+        sys.exit(f"FAIL: no ch2better.nii.gz in {shared} or {shared}/source")
     mpirun = lambda ranks: [mpiexec, "--oversubscribe", "-np", str(ranks)]
     with tempfile.TemporaryDirectory() as tmp:
         out = lambda name: os.path.join(tmp, name)
         brain = out("brain.umesh")
-        run([uvr, "gen", os.path.join(shared, "source", "ch2better.nii.gz"), "--cells", "60000", "-o", brain])
+        run([uvr, "gen", volume, "--cells", "60000", "-o", brain])
         meshes = {"brain": brain, "disk": os.path.join(source, "data", "disk_out_ref.vtu"),
                   "mixed": out("mixed.vtk")}
         write_mixed_mesh(meshes["mixed"])
@@ -148,8 +161,9 @@ def main():
         # Rank 1 cannot open its file: every rank ends, with status 2 and that rank's message.
         missing = out("missing.vtu")
         result = subprocess.run([mpiexec, "--oversubscribe", "-np", "1", uvr, "render", meshes["mixed"],
-                                 "--size", SIZE, "-o", out("x.png"), ":", "-np", "1", uvr, "render", missing,
-                                 "--size", SIZE, "-o", out("x.png")],
+                                 "--size", SIZE, "-o", out("x.png")] + EXTRA +
+                                [":", "-np", "1", uvr, "render", missing, "--size", SIZE, "-o", out("x.png")] +
+                                EXTRA,
                                 capture_output=True, text=True, env=ENV, timeout=120)
         if result.returncode != 2 or "rank 1" not in result.stderr or "missing.vtu" not in result.stderr:
             sys.exit(f"FAIL: a rank without its file: status {result.returncode}:\n{result.stderr}")
