@@ -196,6 +196,12 @@ void runRenderParallel(const RenderCommandOptions &o) {
     renderer->prepare(settings.backend);
     renderer->setTransferFunction(colorMap, range);
   });
+  // Adaptive steps normalise each partition's colour deviation by the extremes over all partitions: the
+  // whole mesh's, over every rank's.
+  ValueRange variances;
+  group.step([&] { variances = renderer->colorVarianceRange(settings.backend); });
+  variances = {float(-group.maxOf(-double(variances.min))), float(group.maxOf(variances.max))};
+  group.step([&] { renderer->setColorVarianceRange(variances); });
 
   settings.keepOpacity = false;
   settings.keepSamplesPerPixel = !o.heatmap.empty();
