@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """`mpirun -np 2` and `-np 4` against a single process: the same image (see LEAST_SSIM) in every mode, on a
 tet brain, disk_out_ref (hexahedra) and a mixed-element mesh, from outside the mesh, inside it and along the
-first split plane; and a rank that cannot open its file ends every rank with status 2.
+first split plane, with every rank reading the mesh and with each reading its share of a .pvtu of 4 pieces
+(`uvr convert --pieces 4`); and a rank that cannot open its file ends every rank with status 2.
 
 Usage: mpi_render_check.py UVR_BINARY MPIEXEC SOURCE_DIR SHARED_DATA_DIR
 SHARED_DATA_DIR holds source/ch2better.nii.gz (or ch2better.nii.gz). UVR_MPI_CHECK_OPTIONS in the environment (e.g. "--backend cuda")
@@ -16,14 +17,12 @@ import sys
 import tempfile
 
 MODES = ("reference", "skip", "adaptive", "full")
-# The issue asks for SSIM >= 0.999. The fixed-step modes take the single process's samples: they differ only
-# where a ray that one process stops at opacity 0.99 inside a region goes on in the next rank's (up to 1% more
-# light; measured down to 0.9978, from inside the brain with 4 ranks). The adaptive modes take the whole mesh's
-# partitions (down to 0.9948), but where cells of equal box centres lie on a top split plane (the mixed mesh's
-# tets: six to a cube, sharing its box) the pieces' trees split them otherwise and their steps differ (down to
-# 0.889). The bounds hold what is measured, with a little room:
-LEAST_SSIM = {"reference": 0.997, "skip": 0.997, "adaptive": 0.99, "full": 0.99}
-LEAST_SSIM_TIED = {"reference": 0.997, "skip": 0.997, "adaptive": 0.88, "full": 0.88}  # the mixed mesh
+# The issue asks for SSIM >= 0.999. The ranks take the single process's samples and, since the median splits
+# place centroids by value alone and the partitions' colour deviations are normalised over all ranks, its
+# partitions and adaptive steps. Images differ only where a ray that one process stops at opacity 0.99 inside a
+# region goes on in the next rank's (up to 1% more light; measured down to 0.9978, from inside the brain with
+# 4 ranks). The bound holds what is measured, with a little room:
+LEAST_SSIM = 0.997
 SIZE = "96x96"
 ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
            OMPI_MCA_rmaps_base_oversubscribe="1")
@@ -115,8 +114,10 @@ def main():
             run(mpirun(2) + [uvr, "render", mesh, "--size", "8x8", "-o", out("probe.png"), "--stats", stats_path])
             with open(stats_path) as f:
                 stats = json.load(f)
-            if stats["ranks"] != 2 or len(stats["rank_render_ms"]) != 2:
-                sys.exit(f"FAIL: {name}: ranks {stats['ranks']}, rank_render_ms {stats['rank_render_ms']}")
+            if stats["ranks"] != 2 or any(len(stats[key]) != 2 for key in
+                                          ("rank_render_ms", "rank_load_ms", "rank_peak_rss_bytes")):
+                sys.exit(f"FAIL: {name}: ranks {stats['ranks']}, rank_render_ms {stats['rank_render_ms']}, "
+                         f"rank_load_ms {stats['rank_load_ms']}, rank_peak_rss_bytes {stats['rank_peak_rss_bytes']}")
             if not stats["composite_bytes"] > 0 or not stats["composite_ms"] >= 0:
                 sys.exit(f"FAIL: {name}: composite_bytes {stats['composite_bytes']}")
             low, high = stats["rank_regions"]
@@ -142,20 +143,23 @@ def main():
                 "plane": ["--eye", ",".join(map(str, eye)), "--at", ",".join(map(str, at)),
                           "--up", ",".join(map(str, up))],
             }
+            pieces = out(f"{name}_pieces.pvtu")
+            run([uvr, "convert", mesh, pieces, "--pieces", "4"])
             for view, options in views.items():
                 for mode in MODES:
                     command = [uvr, "render", mesh, "--mode", mode, "--size", SIZE] + options
                     single = out("single.png")
                     run(command + ["-o", single])
-                    for ranks in (2, 4):
+                    for ranks, source in ((2, mesh), (4, mesh), (2, pieces), (4, pieces)):
                         image = out(f"ranks{ranks}.png")
-                        run(mpirun(ranks) + command + ["-o", image])
+                        run(mpirun(ranks) + [uvr, "render", source] + command[3:] + ["-o", image])
                         ssim = json.loads(run([uvr, "compare", single, image, "--json"]).stdout)["ssim"]
-                        print(f"{name} {view} {mode}, {ranks} ranks: SSIM {ssim:.6f}", flush=True)
+                        read = "pieces" if source == pieces else "whole"
+                        print(f"{name} {view} {mode}, {ranks} ranks, {read}: SSIM {ssim:.6f}", flush=True)
                         worst[mode] = min(worst[mode], ssim)
-                        least = (LEAST_SSIM_TIED if name == "mixed" else LEAST_SSIM)[mode]
-                        if ssim < least:
-                            sys.exit(f"FAIL: {name} {view} {mode}, {ranks} ranks: SSIM {ssim:.6f} < {least}")
+                        if ssim < LEAST_SSIM:
+                            sys.exit(f"FAIL: {name} {view} {mode}, {ranks} ranks, {read}: SSIM {ssim:.6f} < "
+                                     f"{LEAST_SSIM}")
         print(f"every view and mesh matches the single process; worst SSIM by mode: {worst}")
 
         # Rank 1 cannot open its file: every rank ends, with status 2 and that rank's message.
@@ -167,6 +171,16 @@ def main():
                                 capture_output=True, text=True, env=ENV, timeout=120)
         if result.returncode != 2 or "rank 1" not in result.stderr or "missing.vtu" not in result.stderr:
             sys.exit(f"FAIL: a rank without its file: status {result.returncode}:\n{result.stderr}")
+        if os.path.exists(out("x.png")):
+            sys.exit("FAIL: an image was written although a rank failed")
+
+        # A piece that cannot be read: every rank ends, with status 2 and the piece's name.
+        os.remove(out("mixed_pieces/mixed_pieces_2.vtu"))
+        result = subprocess.run(mpirun(4) + [uvr, "render", out("mixed_pieces.pvtu"), "--size", SIZE, "-o",
+                                             out("x.png")] + EXTRA,
+                                capture_output=True, text=True, env=ENV, timeout=120)
+        if result.returncode != 2 or "rank 2" not in result.stderr or "mixed_pieces_2.vtu" not in result.stderr:
+            sys.exit(f"FAIL: a rank without its piece: status {result.returncode}:\n{result.stderr}")
         if os.path.exists(out("x.png")):
             sys.exit("FAIL: an image was written although a rank failed")
 
