@@ -68,6 +68,10 @@ VolumeMesh selectCells(const VolumeMesh &mesh, const std::vector<int> &fields, c
   std::vector<int64_t> offsets{0}, connectivity;
   std::vector<uint8_t> types;
   std::vector<std::vector<float>> cellValues(fields.size());
+  std::vector<std::span<const float>> cellSpans(fields.size());
+  for (size_t f = 0; f < fields.size(); ++f)
+    if (mesh.field(fields[f]).centering == Centering::Cell)
+      cellSpans[f] = mesh.fieldValues(fields[f]);
   forEachCell(mesh, [&](uint64_t cell, CellType type, std::span<const uint32_t> corners) {
     if (!keep(cornerBounds(points, corners)))
       return;
@@ -78,8 +82,8 @@ VolumeMesh selectCells(const VolumeMesh &mesh, const std::vector<int> &fields, c
     offsets.push_back(int64_t(connectivity.size()));
     types.push_back(uint8_t(type));
     for (size_t f = 0; f < fields.size(); ++f)
-      if (mesh.field(fields[f]).centering == Centering::Cell)
-        cellValues[f].push_back(mesh.fieldValues(fields[f])[cell]);
+      if (!cellSpans[f].empty())
+        cellValues[f].push_back(cellSpans[f][cell]);
   });
   std::vector<float> kept;
   uint32_t count = 0;
@@ -219,6 +223,11 @@ VolumeMesh mergeMeshes(const std::vector<VolumeMesh> &parts, const std::string &
     if (part.fieldCount() != fieldCount)
       throw Error(part.source(), "", "the pieces hold different fields");
     const std::span<const Vec3f> partPoints = part.points();
+    std::vector<std::span<const float>> pointValues(static_cast<size_t>(fieldCount)),
+        cellValues(static_cast<size_t>(fieldCount));
+    for (int f = 0; f < fieldCount; ++f)
+      (part.field(f).centering == Centering::Point ? pointValues : cellValues)[size_t(f)] =
+          part.fieldValues(f);
     std::vector<uint32_t> index(partPoints.size());
     std::vector<std::pair<Key, uint32_t>> added;
     for (size_t v = 0; v < partPoints.size(); ++v) {
@@ -231,9 +240,9 @@ VolumeMesh mergeMeshes(const std::vector<VolumeMesh> &parts, const std::string &
       index[v] = uint32_t(points.size() / 3);
       points.insert(points.end(), {partPoints[v].x, partPoints[v].y, partPoints[v].z});
       added.emplace_back(key, index[v]);
-      for (int f = 0; f < fieldCount; ++f)
-        if (part.field(f).centering == Centering::Point)
-          values[size_t(f)].push_back(part.fieldValues(f)[v]);
+      for (size_t f = 0; f < pointValues.size(); ++f)
+        if (!pointValues[f].empty())
+          values[f].push_back(pointValues[f][v]);
     }
     earlier.insert(added.begin(), added.end());
     forEachCell(part, [&](uint64_t cell, CellType type, std::span<const uint32_t> corners) {
@@ -241,9 +250,9 @@ VolumeMesh mergeMeshes(const std::vector<VolumeMesh> &parts, const std::string &
         connectivity.push_back(int64_t(index[v]));
       offsets.push_back(int64_t(connectivity.size()));
       types.push_back(uint8_t(type));
-      for (int f = 0; f < fieldCount; ++f)
-        if (part.field(f).centering == Centering::Cell)
-          values[size_t(f)].push_back(part.fieldValues(f)[cell]);
+      for (size_t f = 0; f < cellValues.size(); ++f)
+        if (!cellValues[f].empty())
+          values[f].push_back(cellValues[f][cell]);
     });
   }
   MeshArrays arrays;

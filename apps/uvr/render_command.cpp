@@ -252,14 +252,16 @@ void runRenderParallel(const RenderCommandOptions &o) {
   // leaf size, the split.
   WholeMesh whole;
   std::optional<VolumeMesh> part;
-  double loadMs = 0.0;
+  double loadMs = 0.0;     ///< until this rank holds its cells and what it takes from the whole mesh
+  double fileLoadMs = 0.0; ///< the file's read alone, where read whole (load_ms, as before)
   std::optional<PartitionedFile> partitioned;
   group.step([&] { partitioned = piecesForRanks(o.view, group.size(), first); });
+  uint64_t loadPeakBytes = 0;
   if (partitioned) {
     group.step([&] {
       const Timer loadTimer;
       part.emplace(readShare(o.view, *partitioned, group.rank(), group.size(), whole.fieldName));
-      loadMs = loadTimer.milliseconds();
+      loadMs = fileLoadMs = loadTimer.milliseconds();
       const PartitionedFile &file = *partitioned;
       whole.cells = file.cells;
       whole.bounds = file.bounds;
@@ -281,8 +283,8 @@ void runRenderParallel(const RenderCommandOptions &o) {
   } else {
     std::optional<LoadedMesh> loaded;
     group.step([&] { loaded.emplace(loadForRendering(o.view)); });
-    loadMs = loaded->loadMs;
     group.step([&] {
+      const Timer pieceTimer; // the load ends with this rank's piece, as a share's does
       const VolumeMesh &mesh = loaded->mesh;
       whole.cells = mesh.cellCount();
       whole.bounds = mesh.bounds();
@@ -296,9 +298,13 @@ void runRenderParallel(const RenderCommandOptions &o) {
       whole.stepScales = mesh.stepScaleReference(o.view.leafSize);
       whole.regions = splitIntoRegions(mesh, group.size());
       part.emplace(meshPiece(mesh, loaded->fieldIndex, whole.regions.regions[size_t(group.rank())]));
+      fileLoadMs = loaded->loadMs;
+      loadMs = loaded->loadMs + pieceTimer.milliseconds();
       loaded.reset(); // the piece is all this rank keeps
     });
   }
+
+  loadPeakBytes = peakResidentBytes();
 
   std::optional<VolumeRenderer> renderer;
   Camera camera;
@@ -357,9 +363,10 @@ void runRenderParallel(const RenderCommandOptions &o) {
   const double compositeMs = group.maxOf(median(compositeTimes));
   const double frameMs = group.maxOf(median(frameTimes));
   const uint64_t compositeBytes = group.sumOf(sentBytes);
-  const double slowestLoadMs = group.maxOf(loadMs);
+  const double slowestLoadMs = group.maxOf(fileLoadMs);
   const std::vector<double> rankLoadMs = group.gather(loadMs);
   const std::vector<double> rankPeakBytes = group.gather(double(peakResidentBytes()));
+  const std::vector<double> rankLoadPeakBytes = group.gather(double(loadPeakBytes));
   stats.samplesTotal = group.sumOf(stats.samplesTotal);
   stats.partitions = uint32_t(group.sumOf(stats.partitions));
   stats.partitionsSkipped = uint32_t(group.sumOf(stats.partitionsSkipped));
@@ -398,10 +405,12 @@ void runRenderParallel(const RenderCommandOptions &o) {
       json["composite_ms"] = compositeMs;
       json["composite_bytes"] = compositeBytes;
       json["rank_load_ms"] = rankLoadMs;
-      std::vector<uint64_t> peaks;
-      for (const double bytes : rankPeakBytes)
-        peaks.push_back(uint64_t(bytes));
-      json["rank_peak_rss_bytes"] = peaks;
+      // Peak resident memory per rank, in all and up to the end of the load (its share of the mesh read).
+      const auto bytes = [](const std::vector<double> &values) {
+        return std::vector<uint64_t>(values.begin(), values.end());
+      };
+      json["rank_peak_rss_bytes"] = bytes(rankPeakBytes);
+      json["rank_load_peak_rss_bytes"] = bytes(rankLoadPeakBytes);
       // Each rank's region within the mesh's bounds: where the split planes lie.
       nlohmann::json boxes = nlohmann::json::array();
       for (const Box3f &region : regions.regions) {
