@@ -194,7 +194,7 @@ std::optional<PartitionedFile> piecesForRanks(const RenderOptions &o, int ranks,
 /// This rank's share of a partitioned file: its consecutive pieces with their ghost cells, field
 /// `fieldIndex` alone (chosen by --field), as one mesh.
 VolumeMesh readShare(const RenderOptions &o, const PartitionedFile &file, int rank, int ranks,
-                     std::string &fieldName) {
+                     FieldInfo &field) {
   const size_t each = file.pieces.size() / size_t(ranks);
   std::vector<Box3f> owned;
   for (size_t i = 0; i < each; ++i)
@@ -208,7 +208,7 @@ VolumeMesh readShare(const RenderOptions &o, const PartitionedFile &file, int ra
       } catch (const Error &e) {
         throw Error(std::string(e.what()) + (o.field.empty() ? "" : " (--field)"));
       }
-      fieldName = mesh.field(fieldIndex).name;
+      field = mesh.field(fieldIndex);
     }
     return std::move(mesh).withFields({fieldIndex});
   };
@@ -260,7 +260,9 @@ void runRenderParallel(const RenderCommandOptions &o) {
   if (partitioned) {
     group.step([&] {
       const Timer loadTimer;
-      part.emplace(readShare(o.view, *partitioned, group.rank(), group.size(), whole.fieldName));
+      FieldInfo field;
+      part.emplace(readShare(o.view, *partitioned, group.rank(), group.size(), field));
+      whole.fieldName = field.name;
       loadMs = fileLoadMs = loadTimer.milliseconds();
       const PartitionedFile &file = *partitioned;
       whole.cells = file.cells;
@@ -269,12 +271,13 @@ void runRenderParallel(const RenderCommandOptions &o) {
       whole.medianVolume = file.medianVolume;
       whole.leafSize = file.leafSize;
       whole.stepScales = file.stepScales;
-      const auto range = std::find_if(file.fieldRanges.begin(), file.fieldRanges.end(),
-                                      [&](const auto &f) { return f.first == whole.fieldName; });
+      const auto range = std::find_if(file.fieldRanges.begin(), file.fieldRanges.end(), [&](const auto &f) {
+        return f.field.name == field.name && f.field.centering == field.centering;
+      });
       if (range == file.fieldRanges.end() && o.view.range.empty())
         throw Error(o.view.mesh, "", "no range of field '" + whole.fieldName + "' in the file: give --range");
       if (range != file.fieldRanges.end())
-        whole.fieldRange = range->second;
+        whole.fieldRange = range->range;
       std::vector<Box3f> pieceRegions;
       for (const PartitionedFile::Piece &piece : file.pieces)
         pieceRegions.push_back(piece.region);

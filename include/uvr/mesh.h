@@ -175,14 +175,18 @@ struct PartitionedFile {
   };
   std::vector<Piece> pieces;
   /// The whole mesh's, where written (cells 0 where not): cell count, bounds, VolumeMesh::defaultStep,
-  /// volumeStats().median, defaultLeafSize and stepScaleReference for it, and each field's range by name.
+  /// volumeStats().median, defaultLeafSize and stepScaleReference for it, and each field's range.
   uint64_t cells = 0;
   Box3f bounds;
   float defaultStep = 0.f;
   double medianVolume = 0.0;
   uint32_t leafSize = 0;
   VolumeMesh::StepScaleReference stepScales;
-  std::vector<std::pair<std::string, ValueRange>> fieldRanges;
+  struct FieldRange {
+    FieldInfo field;
+    ValueRange range;
+  };
+  std::vector<FieldRange> fieldRanges;
 };
 
 /// Reads a .pvtu's list of pieces (see PartitionedFile). Throws uvr::Error where it is no .pvtu.

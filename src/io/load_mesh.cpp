@@ -147,12 +147,13 @@ PartitionedFile parsePvtu(const std::string &path) {
     parts.medianVolume = median[0];
     parts.leafSize = uint32_t(leaf[0]);
     parts.stepScales = {scales[0], float(scales[1])};
-    for (const char *data : {"PPointData", "PCellData"})
+    for (const auto &[data, centering] :
+         {std::pair{"PPointData", Centering::Point}, {"PCellData", Centering::Cell}})
       for (pugi::xml_node array : grid.child(data).children("PDataArray")) {
         const std::vector<double> range = numbersOf(array, "uvr_range");
         if (range.size() == 2)
-          parts.fieldRanges.emplace_back(array.attribute("Name").value(),
-                                         ValueRange{float(range[0]), float(range[1])});
+          parts.fieldRanges.push_back(
+              {{array.attribute("Name").value(), centering}, {float(range[0]), float(range[1])}});
       }
   }
   return parts;
