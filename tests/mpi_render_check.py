@@ -1,34 +1,38 @@
 #!/usr/bin/env python3
 """`mpirun -np 2` and `-np 4` against a single process: the same image (see LEAST_SSIM) in every mode, on a
 tet brain, disk_out_ref (hexahedra) and a mixed-element mesh, from outside the mesh, inside it and along the
-first split plane; and a rank that cannot open its file ends every rank with status 2.
+first split plane, with every rank reading the mesh and with each reading its share of a .pvtu of 4 pieces
+(`uvr convert --pieces 4`); and a rank that cannot open its file ends every rank with status 2.
 
 Usage: mpi_render_check.py UVR_BINARY MPIEXEC SOURCE_DIR SHARED_DATA_DIR
-Options appended to every render, e.g. `--backend cuda` for one rank per GPU: $UVR_MPI_CHECK_OPTIONS.
+SHARED_DATA_DIR holds source/ch2better.nii.gz (or ch2better.nii.gz). UVR_MPI_CHECK_OPTIONS in the environment (e.g. "--backend cuda")
+is appended to every render, single process and ranks alike: the same check with one GPU per rank.
 """
 import json
 import os
 import random
+import shlex
 import subprocess
 import sys
 import tempfile
 
 MODES = ("reference", "skip", "adaptive", "full")
-# The issue asks for SSIM >= 0.999. The fixed-step modes take the single process's samples: they differ only
-# where a ray that one process stops at opacity 0.99 inside a region goes on in the next rank's (up to 1% more
-# light; measured down to 0.9978, from inside the brain with 4 ranks). The adaptive modes take the whole mesh's
-# partitions (down to 0.9948), but where cells of equal box centres lie on a top split plane (the mixed mesh's
-# tets: six to a cube, sharing its box) the pieces' trees split them otherwise and their steps differ (down to
-# 0.889). The bounds hold what is measured, with a little room:
-LEAST_SSIM = {"reference": 0.997, "skip": 0.997, "adaptive": 0.99, "full": 0.99}
-LEAST_SSIM_TIED = {"reference": 0.997, "skip": 0.997, "adaptive": 0.88, "full": 0.88}  # the mixed mesh
+# The issue asks for SSIM >= 0.999. The ranks take the single process's samples and, since the median splits
+# place centroids by value alone and the partitions' colour deviations are normalised over all ranks, its
+# partitions and adaptive steps. Images differ only where a ray that one process stops at opacity 0.99 inside a
+# region goes on in the next rank's (up to 1% more light; measured down to 0.9977, from inside the brain with
+# 4 ranks, every mode alike; disk_out_ref 0.9991, the mixed mesh 0.9994). The bound holds that, with a little
+# room:
+LEAST_SSIM = 0.997
 SIZE = "96x96"
-EXTRA = os.environ.get("UVR_MPI_CHECK_OPTIONS", "").split()
 ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
            OMPI_MCA_rmaps_base_oversubscribe="1")
+EXTRA = shlex.split(os.environ.get("UVR_MPI_CHECK_OPTIONS", ""))
 
 
 def run(command, expect=0, timeout=300):
+    if "render" in command:
+        command = command + EXTRA
     result = subprocess.run(command, capture_output=True, text=True, env=ENV, timeout=timeout)
     if result.returncode != expect:
         sys.exit(f"FAIL: {' '.join(command)} exited with {result.returncode}, expected {expect}:\n"
@@ -89,11 +93,18 @@ def write_mixed_mesh(path, n=6):
 
 def main():
     uvr, mpiexec, source, shared = sys.argv[1:5]
+    # The shared data folder as checkouts have it (source/ch2better.nii.gz), the GPU scripts' flat copy
+    # (shared-data/ch2better.nii.gz), or the volume itself.
+    candidates = [os.path.join(shared, "source", "ch2better.nii.gz"), os.path.join(shared, "ch2better.nii.gz"),
+                  shared]
+    volume = next((path for path in candidates if os.path.isfile(path)), None)
+    if volume is None:
+        sys.exit(f"FAIL: no ch2better.nii.gz in {shared} or {shared}/source")
     mpirun = lambda ranks: [mpiexec, "--oversubscribe", "-np", str(ranks)]
     with tempfile.TemporaryDirectory() as tmp:
         out = lambda name: os.path.join(tmp, name)
         brain = out("brain.umesh")
-        run([uvr, "gen", os.path.join(shared, "source", "ch2better.nii.gz"), "--cells", "60000", "-o", brain])
+        run([uvr, "gen", volume, "--cells", "60000", "-o", brain])
         meshes = {"brain": brain, "disk": os.path.join(source, "data", "disk_out_ref.vtu"),
                   "mixed": out("mixed.vtk")}
         write_mixed_mesh(meshes["mixed"])
@@ -104,8 +115,10 @@ def main():
             run(mpirun(2) + [uvr, "render", mesh, "--size", "8x8", "-o", out("probe.png"), "--stats", stats_path])
             with open(stats_path) as f:
                 stats = json.load(f)
-            if stats["ranks"] != 2 or len(stats["rank_render_ms"]) != 2:
-                sys.exit(f"FAIL: {name}: ranks {stats['ranks']}, rank_render_ms {stats['rank_render_ms']}")
+            if stats["ranks"] != 2 or any(len(stats[key]) != 2 for key in
+                                          ("rank_render_ms", "rank_load_ms", "rank_peak_rss_bytes")):
+                sys.exit(f"FAIL: {name}: ranks {stats['ranks']}, rank_render_ms {stats['rank_render_ms']}, "
+                         f"rank_load_ms {stats['rank_load_ms']}, rank_peak_rss_bytes {stats['rank_peak_rss_bytes']}")
             if not stats["composite_bytes"] > 0 or not stats["composite_ms"] >= 0:
                 sys.exit(f"FAIL: {name}: composite_bytes {stats['composite_bytes']}")
             low, high = stats["rank_regions"]
@@ -131,30 +144,44 @@ def main():
                 "plane": ["--eye", ",".join(map(str, eye)), "--at", ",".join(map(str, at)),
                           "--up", ",".join(map(str, up))],
             }
+            pieces = out(f"{name}_pieces.pvtu")
+            run([uvr, "convert", mesh, pieces, "--pieces", "4"])
             for view, options in views.items():
                 for mode in MODES:
-                    command = [uvr, "render", mesh, "--mode", mode, "--size", SIZE] + options + EXTRA
+                    command = [uvr, "render", mesh, "--mode", mode, "--size", SIZE] + options
                     single = out("single.png")
                     run(command + ["-o", single])
-                    for ranks in (2, 4):
+                    for ranks, source in ((2, mesh), (4, mesh), (2, pieces), (4, pieces)):
                         image = out(f"ranks{ranks}.png")
-                        run(mpirun(ranks) + command + ["-o", image])
+                        run(mpirun(ranks) + [uvr, "render", source] + command[3:] + ["-o", image])
                         ssim = json.loads(run([uvr, "compare", single, image, "--json"]).stdout)["ssim"]
-                        print(f"{name} {view} {mode}, {ranks} ranks: SSIM {ssim:.6f}", flush=True)
+                        read = "pieces" if source == pieces else "whole"
+                        print(f"{name} {view} {mode}, {ranks} ranks, {read}: SSIM {ssim:.6f}", flush=True)
                         worst[mode] = min(worst[mode], ssim)
-                        least = (LEAST_SSIM_TIED if name == "mixed" else LEAST_SSIM)[mode]
-                        if ssim < least:
-                            sys.exit(f"FAIL: {name} {view} {mode}, {ranks} ranks: SSIM {ssim:.6f} < {least}")
+                        if ssim < LEAST_SSIM:
+                            sys.exit(f"FAIL: {name} {view} {mode}, {ranks} ranks, {read}: SSIM {ssim:.6f} < "
+                                     f"{LEAST_SSIM}")
         print(f"every view and mesh matches the single process; worst SSIM by mode: {worst}")
 
         # Rank 1 cannot open its file: every rank ends, with status 2 and that rank's message.
         missing = out("missing.vtu")
         result = subprocess.run([mpiexec, "--oversubscribe", "-np", "1", uvr, "render", meshes["mixed"],
-                                 "--size", SIZE, "-o", out("x.png"), ":", "-np", "1", uvr, "render", missing,
-                                 "--size", SIZE, "-o", out("x.png")],
+                                 "--size", SIZE, "-o", out("x.png")] + EXTRA +
+                                [":", "-np", "1", uvr, "render", missing, "--size", SIZE, "-o", out("x.png")] +
+                                EXTRA,
                                 capture_output=True, text=True, env=ENV, timeout=120)
         if result.returncode != 2 or "rank 1" not in result.stderr or "missing.vtu" not in result.stderr:
             sys.exit(f"FAIL: a rank without its file: status {result.returncode}:\n{result.stderr}")
+        if os.path.exists(out("x.png")):
+            sys.exit("FAIL: an image was written although a rank failed")
+
+        # A piece that cannot be read: every rank ends, with status 2 and the piece's name.
+        os.remove(out("mixed_pieces/mixed_pieces_2.vtu"))
+        result = subprocess.run(mpirun(4) + [uvr, "render", out("mixed_pieces.pvtu"), "--size", SIZE, "-o",
+                                             out("x.png")] + EXTRA,
+                                capture_output=True, text=True, env=ENV, timeout=120)
+        if result.returncode != 2 or "rank 2" not in result.stderr or "mixed_pieces_2.vtu" not in result.stderr:
+            sys.exit(f"FAIL: a rank without its piece: status {result.returncode}:\n{result.stderr}")
         if os.path.exists(out("x.png")):
             sys.exit("FAIL: an image was written although a rank failed")
 

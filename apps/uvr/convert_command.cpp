@@ -16,6 +16,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <initializer_list>
 #include <memory>
 
 namespace uvr {
@@ -102,9 +103,27 @@ std::string escapeXml(const std::string &text) {
   return escaped;
 }
 
+std::string numbers(std::initializer_list<double> values, const char *format = "%.9g") {
+  std::string text;
+  for (const double v : values) {
+    char number[32];
+    std::snprintf(number, sizeof number, format, v);
+    text += (text.empty() ? "" : " ") + std::string(number);
+  }
+  return text;
+}
+
+std::string boxText(const Box3f &b) {
+  return numbers({b.lower.x, b.lower.y, b.lower.z, b.upper.x, b.upper.y, b.upper.z});
+}
+
 /// ParaView's partitioned file: OUT.pvtu naming the pieces OUT/OUT_<i>.vtu, the regions of a KD split of the
 /// mesh in the split's order (front to back along each split), each cell in the piece whose region owns it,
-/// and each piece's region in its <Piece>'s uvr_region attribute (xmin ymin zmin xmax ymax zmax).
+/// and each piece's region in its <Piece>'s uvr_region attribute (xmin ymin zmin xmax ymax zmax). For the
+/// ranks of `mpirun uvr render`, which read only their pieces (readPartitionedFile): each piece's ghost
+/// cells, those of other pieces whose boxes reach into its region, in OUT/OUT_<i>_ghosts.vtu (uvr_ghosts;
+/// not a piece, so ParaView draws each cell once), and what the ranks take from the whole mesh in uvr_
+/// attributes of <PUnstructuredGrid> and each field's uvr_range.
 void writePartitioned(const VolumeMesh &mesh, const ConvertOptions &o, const SaveOptions &save) {
   namespace fs = std::filesystem;
   const fs::path output(o.output);
@@ -117,29 +136,42 @@ void writePartitioned(const VolumeMesh &mesh, const ConvertOptions &o, const Sav
   const MeshRegions regions = splitIntoRegions(mesh, o.pieces);
   std::string pieces;
   for (int i = 0; i < o.pieces; ++i) {
-    const VolumeMesh piece = ownedCells(mesh, regions.regions[size_t(i)]);
+    const Box3f &region = regions.regions[size_t(i)];
     const std::string name = stem + "_" + std::to_string(i) + ".vtu";
-    const std::string path = (folder / name).string();
-    writeWhole(path, [&](const std::string &temporary) { piece.save(temporary, save); });
-    const Box3f &r = regions.regions[size_t(i)];
-    char region[160];
-    std::snprintf(region, sizeof region, "%.9g %.9g %.9g %.9g %.9g %.9g", double(r.lower.x),
-                  double(r.lower.y), double(r.lower.z), double(r.upper.x), double(r.upper.y),
-                  double(r.upper.z));
-    pieces += "    <Piece Source=\"" + escapeXml(stem + "/" + name) + "\" uvr_region=\"" + region + "\"/>\n";
+    const VolumeMesh piece = ownedCells(mesh, region);
+    writeWhole((folder / name).string(), [&](const std::string &temporary) { piece.save(temporary, save); });
+    pieces +=
+        "    <Piece Source=\"" + escapeXml(stem + "/" + name) + "\" uvr_region=\"" + boxText(region) + "\"";
+    const VolumeMesh ghosts = ghostCells(mesh, region);
+    if (ghosts.cellCount() > 0) {
+      const std::string ghostName = stem + "_" + std::to_string(i) + "_ghosts.vtu";
+      writeWhole((folder / ghostName).string(),
+                 [&](const std::string &temporary) { ghosts.save(temporary, save); });
+      pieces += " uvr_ghosts=\"" + escapeXml(stem + "/" + ghostName) + "\"";
+    }
+    pieces += "/>\n";
   }
   std::string point, cell;
   for (int f = 0; f < mesh.fieldCount(); ++f) {
     const FieldInfo field = mesh.field(f);
-    (field.centering == Centering::Point ? point : cell) +=
-        "      <PDataArray type=\"Float32\" Name=\"" + escapeXml(field.name) + "\"/>\n";
+    const ValueRange range = mesh.fieldRange(f);
+    (field.centering == Centering::Point ? point : cell) += "      <PDataArray type=\"Float32\" Name=\"" +
+                                                            escapeXml(field.name) + "\" uvr_range=\"" +
+                                                            numbers({range.min, range.max}) + "\"/>\n";
   }
+  const VolumeMesh::StepScaleReference scales = mesh.stepScaleReference();
+  const std::string whole =
+      " uvr_cells=\"" + std::to_string(mesh.cellCount()) + "\" uvr_bounds=\"" + boxText(mesh.bounds()) +
+      "\" uvr_default_step=\"" + numbers({mesh.defaultStep()}) + "\" uvr_median_volume=\"" +
+      numbers({mesh.volumeStats().median}, "%.17g") + "\" uvr_leaf_size=\"" +
+      std::to_string(mesh.defaultLeafSize()) + "\" uvr_step_scales=\"" +
+      numbers({scales.meanCellSizeLog2}, "%.17g") + " " + numbers({scales.finestStepScale}) + "\"";
   writeWhole(o.output, [&](const std::string &temporary) {
     std::ofstream out(temporary);
     out << "<?xml version=\"1.0\"?>\n"
         << "<VTKFile type=\"PUnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" "
            "header_type=\"UInt64\">\n"
-        << "  <PUnstructuredGrid GhostLevel=\"0\">\n"
+        << "  <PUnstructuredGrid GhostLevel=\"0\"" << whole << ">\n"
         << "    <PPointData>\n"
         << point << "    </PPointData>\n"
         << "    <PCellData>\n"

@@ -22,10 +22,15 @@
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <memory>
 #include <optional>
+#include <string>
 #include <thread>
+#include <vector>
+
+#include <sys/resource.h>
 
 namespace uvr {
 
@@ -144,9 +149,93 @@ void runRender(const RenderCommandOptions &o) {
 }
 
 #ifdef UVR_HAS_MPI
+/// The most memory this process has held (its peak resident set).
+uint64_t peakResidentBytes() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return uint64_t(usage.ru_maxrss) * 1024; // kilobytes on Linux
+}
+
+/// What the ranks take from the whole mesh: from the mesh read whole, or from a partitioned file's summary.
+struct WholeMesh {
+  uint64_t cells = 0;
+  Box3f bounds;
+  float defaultStep = 0.f;
+  double medianVolume = 0.0;
+  uint32_t leafSize = 0;                     ///< the default
+  VolumeMesh::StepScaleReference stepScales; ///< for the leaf size rendered with
+  ValueRange fieldRange;
+  std::string fieldName;
+  MeshRegions regions;
+};
+
+/// The partitioned file (`uvr convert --pieces`) whose pieces the ranks read a share each, or none where
+/// each reads the mesh whole: not such a file, or its pieces do not fit the ranks (said on stderr).
+std::optional<PartitionedFile> piecesForRanks(const RenderOptions &o, int ranks, bool first) {
+  std::string extension = std::filesystem::path(o.mesh).extension().string();
+  std::transform(extension.begin(), extension.end(), extension.begin(),
+                 [](unsigned char c) { return char(std::tolower(c)); });
+  if (extension != ".pvtu")
+    return std::nullopt;
+  PartitionedFile file = readPartitionedFile(o.mesh);
+  const int pieces = int(file.pieces.size());
+  const bool powerOf2 = (ranks & (ranks - 1)) == 0;
+  std::string why;
+  if (file.cells == 0 ||
+      std::any_of(file.pieces.begin(), file.pieces.end(), [](const auto &p) { return p.region.empty(); }))
+    why = "it was not written by `uvr convert --pieces`";
+  else if (pieces != ranks && !(powerOf2 && pieces % ranks == 0))
+    why = std::to_string(pieces) + " pieces do not fit " + std::to_string(ranks) +
+          " ranks (a rank takes one piece, or where the ranks are a power of 2, as many as each can)";
+  else if (o.leafSize != kAutoLeafSize && o.leafSize != file.leafSize)
+    why = "it holds the step scales for the default --leaf-size (" + std::to_string(file.leafSize) + ")";
+  if (why.empty())
+    return file;
+  if (first)
+    std::fprintf(stderr, "uvr: %s: every rank reads every piece: %s\n", o.mesh.c_str(), why.c_str());
+  return std::nullopt;
+}
+
+/// This rank's share of a partitioned file: its consecutive pieces with their ghost cells, field
+/// `fieldIndex` alone (chosen by --field), as one mesh.
+VolumeMesh readShare(const RenderOptions &o, const PartitionedFile &file, int rank, int ranks,
+                     FieldInfo &field) {
+  const size_t each = file.pieces.size() / size_t(ranks);
+  std::vector<Box3f> owned;
+  for (size_t i = 0; i < each; ++i)
+    owned.push_back(file.pieces[size_t(rank) * each + i].region);
+  std::vector<VolumeMesh> parts;
+  int fieldIndex = -1;
+  const auto withField = [&](VolumeMesh mesh) {
+    if (fieldIndex < 0) {
+      try {
+        fieldIndex = mesh.chooseField(o.field);
+      } catch (const Error &e) {
+        throw Error(std::string(e.what()) + (o.field.empty() ? "" : " (--field)"));
+      }
+      field = mesh.field(fieldIndex);
+    }
+    return std::move(mesh).withFields({fieldIndex});
+  };
+  for (size_t i = 0; i < each; ++i) {
+    const PartitionedFile::Piece &piece = file.pieces[size_t(rank) * each + i];
+    parts.push_back(withField(VolumeMesh::load(piece.path)));
+    if (!piece.ghosts.empty()) {
+      const VolumeMesh ghosts = withField(VolumeMesh::load(piece.ghosts));
+      // Those owned by another of this rank's pieces, or in an earlier one's ghosts, are here already.
+      parts.push_back(
+          each == 1 ? ghosts
+                    : ghostCellsOutside(ghosts, owned,
+                                        std::vector<Box3f>(owned.begin(), owned.begin() + ptrdiff_t(i))));
+    }
+  }
+  return mergeMeshes(parts, o.mesh);
+}
+
 /// `uvr render` over the ranks of an MPI run: each rank draws the cells of its region of a KD split of the
-/// mesh (every rank reads the mesh whole), the ranks composite their premultiplied images in visibility
-/// order, and rank 0 applies the background and writes the outputs.
+/// mesh, the ranks composite their premultiplied images in visibility order, and rank 0 applies the
+/// background and writes the outputs. Each rank reads its share of a partitioned file (piecesForRanks), and
+/// the mesh whole otherwise.
 void runRenderParallel(const RenderCommandOptions &o) {
   MpiGroup group;
   const bool first = group.rank() == 0;
@@ -166,44 +255,97 @@ void runRenderParallel(const RenderCommandOptions &o) {
       checkOutputs(o);
     colorMap = chooseTransferFunction(o.view);
   });
-  std::optional<LoadedMesh> loaded;
-  group.step([&] { loaded.emplace(loadForRendering(o.view)); });
 
-  // What depends on the whole mesh comes from it: defaults, value range, camera, leaf size, the split.
+  // This rank's cells (field 0 alone), and what depends on the whole mesh: defaults, value range, camera,
+  // leaf size, the split.
+  WholeMesh whole;
+  std::optional<VolumeMesh> part;
+  double loadMs = 0.0;     ///< until this rank holds its cells and what it takes from the whole mesh
+  double fileLoadMs = 0.0; ///< the file's read alone, where read whole (load_ms, as before)
+  std::optional<PartitionedFile> partitioned;
+  group.step([&] { partitioned = piecesForRanks(o.view, group.size(), first); });
+  uint64_t loadPeakBytes = 0;
+  if (partitioned) {
+    group.step([&] {
+      const Timer loadTimer;
+      FieldInfo field;
+      part.emplace(readShare(o.view, *partitioned, group.rank(), group.size(), field));
+      whole.fieldName = field.name;
+      loadMs = fileLoadMs = loadTimer.milliseconds();
+      const PartitionedFile &file = *partitioned;
+      whole.cells = file.cells;
+      whole.bounds = file.bounds;
+      whole.defaultStep = file.defaultStep;
+      whole.medianVolume = file.medianVolume;
+      whole.leafSize = file.leafSize;
+      whole.stepScales = file.stepScales;
+      const auto range = std::find_if(file.fieldRanges.begin(), file.fieldRanges.end(), [&](const auto &f) {
+        return f.field.name == field.name && f.field.centering == field.centering;
+      });
+      if (range == file.fieldRanges.end() && o.view.range.empty())
+        throw Error(o.view.mesh, "", "no range of field '" + whole.fieldName + "' in the file: give --range");
+      if (range != file.fieldRanges.end())
+        whole.fieldRange = range->range;
+      std::vector<Box3f> pieceRegions;
+      for (const PartitionedFile::Piece &piece : file.pieces)
+        pieceRegions.push_back(piece.region);
+      whole.regions = regionsOfPieces(pieceRegions, group.size());
+    });
+  } else {
+    std::optional<LoadedMesh> loaded;
+    group.step([&] { loaded.emplace(loadForRendering(o.view)); });
+    group.step([&] {
+      const Timer pieceTimer; // the load ends with this rank's piece, as a share's does
+      const VolumeMesh &mesh = loaded->mesh;
+      whole.cells = mesh.cellCount();
+      whole.bounds = mesh.bounds();
+      if (whole.cells < uint64_t(group.size()))
+        throw Error(mesh.source(), "", "fewer cells than ranks: run fewer ranks");
+      whole.medianVolume = mesh.volumeStats().median;
+      whole.defaultStep = mesh.defaultStep();
+      whole.leafSize = mesh.defaultLeafSize();
+      whole.fieldRange = mesh.fieldRange(loaded->fieldIndex);
+      whole.fieldName = mesh.field(loaded->fieldIndex).name;
+      whole.stepScales = mesh.stepScaleReference(o.view.leafSize);
+      whole.regions = splitIntoRegions(mesh, group.size());
+      part.emplace(meshPiece(mesh, loaded->fieldIndex, whole.regions.regions[size_t(group.rank())]));
+      fileLoadMs = loaded->loadMs;
+      loadMs = loaded->loadMs + pieceTimer.milliseconds();
+      loaded.reset(); // the piece is all this rank keeps
+    });
+  }
+
+  loadPeakBytes = peakResidentBytes();
+
   std::optional<VolumeRenderer> renderer;
   Camera camera;
-  MeshRegions regions;
-  uint64_t wholeCells = 0;
-  Box3f wholeBounds;
-  const double loadMs = loaded->loadMs;
+  const MeshRegions &regions = whole.regions;
   group.step([&] {
-    const VolumeMesh &whole = loaded->mesh;
-    wholeCells = whole.cellCount();
-    wholeBounds = whole.bounds();
-    if (wholeCells < uint64_t(group.size()))
-      throw Error(whole.source(), "", "fewer cells than ranks: run fewer ranks");
     const bool defaults =
         !(settings.s1 > 0.f && settings.s2 > 0.f && settings.p > 0.f && settings.unit > 0.f);
-    if (defaults && !(settings.s1 > 0.f && settings.unit > 0.f) && !(whole.volumeStats().median > 0.0))
-      throw Error(whole.source(), "", "no default step: the median cell volume is 0; give --s1 and --unit");
+    if (defaults && !(settings.s1 > 0.f && settings.unit > 0.f) && !(whole.medianVolume > 0.0))
+      throw Error(o.view.mesh, "", "no default step: the median cell volume is 0; give --s1 and --unit");
     if (defaults)
-      settings = withDefaultSampling(settings, whole.defaultStep(),
-                                     defaultUnitDistance(whole.bounds(), whole.cellCount()));
+      settings =
+          withDefaultSampling(settings, whole.defaultStep, defaultUnitDistance(whole.bounds, whole.cells));
     validateSettings(settings);
-    const ValueRange range = transferRange(o.view, whole, loaded->fieldIndex);
-    camera = chooseCamera(o.view, whole);
-    regions = splitIntoRegions(whole, group.size());
-    const uint32_t leafSize = o.view.leafSize != kAutoLeafSize ? o.view.leafSize : whole.defaultLeafSize();
-    const MeshPiece piece{regions.regions[size_t(group.rank())], whole.bounds(),
-                          whole.stepScaleReference(leafSize)};
-    VolumeMesh part = meshPiece(whole, loaded->fieldIndex, piece.region);
-    loaded.reset(); // the piece is all this rank keeps
+    const ValueRange range = transferRange(o.view, whole.fieldRange, whole.fieldName);
+    camera = chooseCamera(o.view, whole.bounds);
+    const uint32_t leafSize = o.view.leafSize != kAutoLeafSize ? o.view.leafSize : whole.leafSize;
+    const MeshPiece piece{regions.regions[size_t(group.rank())], whole.bounds, whole.stepScales};
     if (settings.backend == Backend::Cuda)
       setCudaDevice(group.localRank() % std::max(1, cudaDeviceCount()));
-    renderer.emplace(std::move(part), 0, leafSize, piece);
+    renderer.emplace(std::move(*part), 0, leafSize, piece);
+    part.reset();
     renderer->prepare(settings.backend);
     renderer->setTransferFunction(colorMap, range);
   });
+  // Adaptive steps normalise each partition's colour deviation by the extremes over all partitions: the
+  // whole mesh's, over every rank's.
+  ValueRange variances;
+  group.step([&] { variances = renderer->colorVarianceRange(settings.backend); });
+  variances = {float(-group.maxOf(-double(variances.min))), float(group.maxOf(variances.max))};
+  group.step([&] { renderer->setColorVarianceRange(variances); });
 
   settings.keepOpacity = false;
   settings.keepSamplesPerPixel = !o.heatmap.empty();
@@ -236,7 +378,10 @@ void runRenderParallel(const RenderCommandOptions &o) {
   const double compositeMs = group.maxOf(median(compositeTimes));
   const double frameMs = group.maxOf(median(frameTimes));
   const uint64_t compositeBytes = group.sumOf(sentBytes);
-  const double slowestLoadMs = group.maxOf(loadMs);
+  const double slowestLoadMs = group.maxOf(fileLoadMs);
+  const std::vector<double> rankLoadMs = group.gather(loadMs);
+  const std::vector<double> rankPeakBytes = group.gather(double(peakResidentBytes()));
+  const std::vector<double> rankLoadPeakBytes = group.gather(double(loadPeakBytes));
   stats.samplesTotal = group.sumOf(stats.samplesTotal);
   stats.partitions = uint32_t(group.sumOf(stats.partitions));
   stats.partitionsSkipped = uint32_t(group.sumOf(stats.partitionsSkipped));
@@ -250,7 +395,7 @@ void runRenderParallel(const RenderCommandOptions &o) {
     // Without the per-pixel counts, the most any rank's part of a pixel took.
     stats.samplesPerPixelMax = uint32_t(group.maxOf(stats.samplesPerPixelMax));
   }
-  stats.cells = wholeCells;
+  stats.cells = whole.cells;
   stats.samplesPerPixelMean = double(stats.samplesTotal) / (double(settings.width) * double(settings.height));
   stats.renderMs = frameMs;
   stats.tfUpdateMs = tfUpdateMs;
@@ -263,7 +408,7 @@ void runRenderParallel(const RenderCommandOptions &o) {
                  "uvr: %s %dx%d, %llu cells, %d ranks, %u partitions, %.1f samples/pixel, %.1f ms/frame "
                  "(composite %.1f ms)\n",
                  modeName(settings.mode), settings.width, settings.height,
-                 static_cast<unsigned long long>(wholeCells), ranks, stats.partitions,
+                 static_cast<unsigned long long>(whole.cells), ranks, stats.partitions,
                  stats.samplesPerPixelMean, frameMs, compositeMs);
     if (!o.stats.empty()) {
       nlohmann::json json = frameStatsJson(stats);
@@ -277,10 +422,17 @@ void runRenderParallel(const RenderCommandOptions &o) {
         json["rank_gpu_kernel_ms"] = rankKernelMs;
       json["composite_ms"] = compositeMs;
       json["composite_bytes"] = compositeBytes;
+      json["rank_load_ms"] = rankLoadMs;
+      // Peak resident memory per rank, in all and up to the end of the load (its share of the mesh read).
+      const auto bytes = [](const std::vector<double> &values) {
+        return std::vector<uint64_t>(values.begin(), values.end());
+      };
+      json["rank_peak_rss_bytes"] = bytes(rankPeakBytes);
+      json["rank_load_peak_rss_bytes"] = bytes(rankLoadPeakBytes);
       // Each rank's region within the mesh's bounds: where the split planes lie.
       nlohmann::json boxes = nlohmann::json::array();
       for (const Box3f &region : regions.regions) {
-        const Box3f box = {vmax(region.lower, wholeBounds.lower), vmin(region.upper, wholeBounds.upper)};
+        const Box3f box = {vmax(region.lower, whole.bounds.lower), vmin(region.upper, whole.bounds.upper)};
         boxes.push_back({box.lower.x, box.lower.y, box.lower.z, box.upper.x, box.upper.y, box.upper.z});
       }
       json["rank_regions"] = boxes;

@@ -224,20 +224,26 @@ ColorMap chooseTransferFunction(const RenderOptions &o) {
 ValueRange transferRange(const RenderOptions &o, const VolumeMesh &mesh, int fieldIndex) {
   if (!o.range.empty())
     return {o.range[0], o.range[1]};
-  const ValueRange data = mesh.fieldRange(fieldIndex);
+  return transferRange(o, mesh.fieldRange(fieldIndex), mesh.field(fieldIndex).name);
+}
+
+ValueRange transferRange(const RenderOptions &o, ValueRange data, const std::string &name) {
+  if (!o.range.empty())
+    return {o.range[0], o.range[1]};
   const ValueRange range = defaultTransferRange(data);
   if (!(data.min < data.max))
     std::fprintf(stderr,
                  "uvr: field '%s' is constant (%g): the transfer function spans [%g, %g]; set --range\n",
-                 mesh.field(fieldIndex).name.c_str(), double(data.min), double(range.min), double(range.max));
+                 name.c_str(), double(data.min), double(range.min), double(range.max));
   return range;
 }
 
-Camera chooseCamera(const RenderOptions &o, const VolumeMesh &mesh) {
+Camera chooseCamera(const RenderOptions &o, const VolumeMesh &mesh) { return chooseCamera(o, mesh.bounds()); }
+
+Camera chooseCamera(const RenderOptions &o, const Box3f &bounds) {
   int width, height;
   parseSize(o.size, width, height);
-  Camera camera =
-      frameBounds(mesh.bounds(), o.view.empty() ? "+z" : o.view, o.fovy, float(width) / float(height));
+  Camera camera = frameBounds(bounds, o.view.empty() ? "+z" : o.view, o.fovy, float(width) / float(height));
   if (!o.at.empty())
     camera.at = parseVector(o.at, "at");
   if (!o.eye.empty())

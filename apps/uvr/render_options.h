@@ -63,8 +63,12 @@ ColorMap chooseTransferFunction(const RenderOptions &options);
 /// The --range, or the default range of the mesh's field `fieldIndex` (defaultTransferRange; a constant
 /// field is reported on stderr).
 ValueRange transferRange(const RenderOptions &options, const VolumeMesh &mesh, int fieldIndex);
+/// The same for a field of range `data` named `name`.
+ValueRange transferRange(const RenderOptions &options, ValueRange data, const std::string &name);
 
 /// ParaView's reset camera for the mesh from --view, with --eye, --at, --up and --fovy applied.
 Camera chooseCamera(const RenderOptions &options, const VolumeMesh &mesh);
+/// The same for a mesh of bounds `bounds`.
+Camera chooseCamera(const RenderOptions &options, const Box3f &bounds);
 
 } // namespace uvr

@@ -11,6 +11,7 @@
 #include <memory>
 #include <span>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace uvr {
@@ -162,5 +163,33 @@ private:
   explicit VolumeMesh(std::shared_ptr<Impl> impl);
   std::shared_ptr<Impl> impl_;
 };
+
+/// What a partitioned .pvtu names: its pieces in order and, as `uvr convert --pieces` writes them, each
+/// piece's region of space and the file of the cells it lacks there, and what renderers of the pieces take
+/// from the whole mesh. Read without reading the pieces.
+struct PartitionedFile {
+  struct Piece {
+    std::string path;   ///< its .vtu: the cells it owns (those whose box centres lie in its region)
+    std::string ghosts; ///< a .vtu of the cells other pieces own whose boxes reach into its region; or empty
+    Box3f region;       ///< empty where not written
+  };
+  std::vector<Piece> pieces;
+  /// The whole mesh's, where written (cells 0 where not): cell count, bounds, VolumeMesh::defaultStep,
+  /// volumeStats().median, defaultLeafSize and stepScaleReference for it, and each field's range.
+  uint64_t cells = 0;
+  Box3f bounds;
+  float defaultStep = 0.f;
+  double medianVolume = 0.0;
+  uint32_t leafSize = 0;
+  VolumeMesh::StepScaleReference stepScales;
+  struct FieldRange {
+    FieldInfo field;
+    ValueRange range;
+  };
+  std::vector<FieldRange> fieldRanges;
+};
+
+/// Reads a .pvtu's list of pieces (see PartitionedFile). Throws uvr::Error where it is no .pvtu.
+PartitionedFile readPartitionedFile(const std::string &path);
 
 } // namespace uvr

@@ -140,6 +140,15 @@ public:
   /// finite (defaultTransferRange widens a constant field's range).
   void setTransferFunction(const ColorMap &map, ValueRange range);
 
+  /// The extremes of the colour variances of the partitions that the transfer function draws ({+inf, -inf}
+  /// where none), on `backend` (prepared, with a transfer function set): what adaptive sampling normalises
+  /// each partition's deviation by (paper §2.1).
+  ValueRange colorVarianceRange(Backend backend) const;
+  /// Normalises by `range` rather than by the partitions' own extremes, under this and later transfer
+  /// functions ({NaN, NaN}: their own again): the pieces of a mesh split among processes take the extremes
+  /// over all pieces, so that they sample adaptively as the whole mesh does.
+  void setColorVarianceRange(ValueRange range);
+
   /// Builds what `backend` needs ahead of the first frame, so that frame times exclude it: the acceleration
   /// data on the host, or on the GPU (uploading the mesh and any transfer function). Throws uvr::Error when
   /// the backend is not in this build or no GPU is found.

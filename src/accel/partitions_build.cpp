@@ -71,6 +71,28 @@ void selectMedian(Centroid *first, Centroid *middle, Centroid *last, int axis) {
     along(std::integral_constant<int, 2>{});
 }
 
+/// Moves `middle`, the median along `axis` after selectMedian, to the nearer end of the centroids of its
+/// value, so that those go wholly above the split (or wholly below, where that is nearer the median):
+/// centroids on the split go above it, as a region's box holds them (lower <= p < upper). Which side a cell
+/// takes then depends on its centroid alone, not on its index, so that a piece of the mesh (other cells,
+/// another order) builds the same subtree over the same centroids. Returns the split position, or NaN where
+/// every centroid has the same value along `axis`.
+float splitAtValue(Centroid *first, Centroid *&middle, Centroid *last, int axis) {
+  const float median = middle->p[axis];
+  Centroid *low = std::partition(first, middle, [&](const Centroid &c) { return c.p[axis] < median; });
+  Centroid *high = std::partition(middle, last, [&](const Centroid &c) { return c.p[axis] <= median; });
+  if (low == first && high == last)
+    return NAN;
+  if (high == last || (low != first && middle - low <= high - middle)) {
+    middle = low;
+    return median;
+  }
+  middle = high;
+  return std::min_element(high, last,
+                          [&](const Centroid &a, const Centroid &b) { return a.p[axis] < b.p[axis]; })
+      ->p[axis];
+}
+
 /// Nodes and leaf boxes of a subtree, as the depth-first build lays them out: nodes[0] is the root, and an
 /// inner node's children are appended side by side before either child's subtree.
 struct Subtree {
@@ -135,8 +157,8 @@ private:
     const int axis = widestAxis(parallelBounds(count, [&](uint64_t i) { return first[i].p; }).size());
     middle = first + count / 2;
     selectMedian(first, middle, last, axis);
-    node = {middle->p[axis], uint32_t(axis), 0};
-    // A split on the box's face leaves one side empty: stop there.
+    node = {splitAtValue(first, middle, last, axis), uint32_t(axis), 0};
+    // A split on the box's face leaves one side empty: stop there (also where no split exists: NaN).
     return node.split > box.lower[axis] && node.split < box.upper[axis];
   }
 
@@ -153,7 +175,7 @@ private:
     tree.nodes[index] = node;
     tree.nodes.resize(tree.nodes.size() + 2);
     const std::array<Box3f, 2> childBox = childBoxes(box, node);
-    // Cells with centroid at the split go below or above by index; their boxes are assigned later.
+    // Cells with centroid at the split go above; their boxes are assigned later.
     buildSerial(tree, node.child, childBox[0], first, middle, depth + 1);
     buildSerial(tree, node.child + 1, childBox[1], middle, last, depth + 1);
   }
@@ -256,12 +278,17 @@ int splitRegion(RegionSplit &split, const Box3f &box, Centroid *first, Centroid 
     split.regions[size_t(firstRegion)] = box;
     return index; // more regions than cells: the others stay empty
   }
-  // TreeBuilder::split's choice: the axis the centroids spread most along, the median by position and index.
+  // TreeBuilder::split's choice: the axis the centroids spread most along, the median by position, the
+  // centroids on the split above it.
   const int axis = widestAxis(parallelBounds(cells, [&](uint64_t i) { return first[i].p; }).size());
   const int below = count / 2;
   Centroid *middle = first + cells * size_t(below) / size_t(count);
   selectMedian(first, middle, last, axis);
-  const float position = middle->p[axis];
+  float position = splitAtValue(first, middle, last, axis);
+  if (std::isnan(position)) { // every centroid alike along the axis: the regions below hold none
+    position = first->p[axis];
+    middle = first;
+  }
   Box3f lower = box, upper = box;
   lower.upper[axis] = position;
   upper.lower[axis] = position;

@@ -144,6 +144,17 @@ void VolumeRenderer::setTransferFunction(const ColorMap &map, ValueRange range) 
   impl_->range = range;
 }
 
+ValueRange VolumeRenderer::colorVarianceRange(Backend backend) const {
+  const std::lock_guard<std::mutex> lock(impl_->mutex);
+  const auto [lowest, highest] = impl_->renderer.varianceExtremes(backend);
+  return {lowest, highest};
+}
+
+void VolumeRenderer::setColorVarianceRange(ValueRange range) {
+  const std::lock_guard<std::mutex> lock(impl_->mutex);
+  impl_->renderer.setVarianceRange(range.min, range.max);
+}
+
 void VolumeRenderer::setField(VolumeMesh mesh, int fieldIndex) {
   if (fieldIndex < 0 || fieldIndex >= mesh.fieldCount())
     throw Error(mesh.source(), "", "no field " + std::to_string(fieldIndex) + " to render");

@@ -51,6 +51,7 @@ void Renderer::setPiece(const Box3f &region, const Box3f &wholeBounds, double me
 void Renderer::setTransferFunction(TransferFunction tf) {
   const Timer timer;
   tf_.emplace(std::move(tf));
+  tf_->setVarianceRange(varianceLowest_, varianceHighest_);
   for (const std::unique_ptr<RenderBackend> &b : backends_)
     if (b)
       transparentPartitions_ = b->setTransferFunction(*tf_);
@@ -131,6 +132,22 @@ std::vector<std::pair<std::string, double>> Renderer::deviceBuildSteps() const {
 }
 HostAcceleration Renderer::deviceAcceleration() const { return backend(Backend::Cuda).acceleration(); }
 PartitionMetadata Renderer::deviceMetadata() const { return backend(Backend::Cuda).metadata(); }
+
+void Renderer::setVarianceRange(float lowest, float highest) {
+  varianceLowest_ = lowest;
+  varianceHighest_ = highest;
+  if (tf_)
+    setTransferFunction(*tf_);
+}
+
+std::pair<float, float> Renderer::varianceExtremes(Backend b) const {
+  if (b == Backend::Cpu) {
+    const PartitionMetadata &meta = metadata();
+    return {meta.varianceLowest, meta.varianceHighest};
+  }
+  const PartitionMetadata meta = deviceMetadata();
+  return {meta.varianceLowest, meta.varianceHighest};
+}
 
 Frame Renderer::render(const Camera &camera, const RenderSettings &settings) {
   Frame frame;

@@ -67,6 +67,12 @@ public:
   /// Replaces the transfer function and recomputes the partitions' metadata on every backend prepared; a
   /// backend prepared later takes it then. The mesh is not touched.
   void setTransferFunction(TransferFunction tf);
+  /// Normalises the partitions' colour variances by [lowest, highest] from now on, under this and later
+  /// transfer functions (NaN: by their own extremes); see TransferFunction::setVarianceRange.
+  void setVarianceRange(float lowest, float highest);
+  /// The extremes of the colour variances of the partitions drawn under the current transfer function on
+  /// `backend` (PartitionMetadata::varianceLowest, varianceHighest).
+  std::pair<float, float> varianceExtremes(Backend backend) const;
 
   /// Renders field `fieldIndex` of `mesh` from now on: a mesh with the same points and cells as the one
   /// rendered so far (the caller checks), which must outlive the renderer in its place. Every backend
@@ -133,6 +139,7 @@ private:
   float wholeFinestStepScale_ = 0.f;
   uint32_t leafSize_;
   std::optional<TransferFunction> tf_;
+  float varianceLowest_ = NAN, varianceHighest_ = NAN; ///< setVarianceRange's
   uint32_t transparentPartitions_ = 0;
   double tfUpdateMs_ = 0.0;
   std::vector<Vec3f> gradients_; // per point, once a frame is shaded

@@ -4,12 +4,14 @@
 #include "io/mesh_io.h"
 #include "io/text_scan.h"
 #include <uvr/error.h>
+#include <uvr/mesh.h>
 
 #include <pugixml.hpp>
 
 #include <algorithm>
 #include <cctype>
 #include <charconv>
+#include <cstdlib>
 #include <filesystem>
 #include <set>
 
@@ -89,16 +91,38 @@ Series readPvd(const std::string &path) {
   return series;
 }
 
-/// The pieces a ParaView partitioned file (.pvtu) names, in its order.
-std::vector<std::string> readPvtu(const std::string &path) {
+/// Numbers of a uvr_ attribute, space-separated; empty where absent.
+std::vector<double> numbersOf(const pugi::xml_node &node, const char *name) {
+  std::vector<double> numbers;
+  const char *text = node.attribute(name).value();
+  for (char *end = nullptr;; text = end) {
+    const double value = std::strtod(text, &end);
+    if (end == text)
+      break;
+    numbers.push_back(value);
+  }
+  return numbers;
+}
+
+Box3f boxOf(const std::vector<double> &v) {
+  if (v.size() != 6)
+    return {};
+  return {{float(v[0]), float(v[1]), float(v[2])}, {float(v[3]), float(v[4]), float(v[5])}};
+}
+
+/// A ParaView partitioned file (.pvtu): its pieces in order, with what `uvr convert --pieces` adds.
+PartitionedFile parsePvtu(const std::string &path) {
   FileBuffer file;
   pugi::xml_document doc;
   parseXmlFile(path, file, doc);
   const pugi::xml_node grid = doc.child("VTKFile").child("PUnstructuredGrid");
   if (std::string_view(doc.child("VTKFile").attribute("type").value()) != "PUnstructuredGrid" || !grid)
     throw Error(path, "", "expected <VTKFile type=\"PUnstructuredGrid\"> with a <PUnstructuredGrid>");
-  std::vector<std::string> pieces;
+  PartitionedFile parts;
   const fs::path directory = fs::path(path).parent_path();
+  const auto near = [&](const std::string &source) {
+    return fs::path(source).is_absolute() ? source : (directory / source).string();
+  };
   for (pugi::xml_node node : grid.children("Piece")) {
     const std::string source = node.attribute("Source").value();
     const std::string position = "byte " + std::to_string(node.offset_debug());
@@ -106,10 +130,40 @@ std::vector<std::string> readPvtu(const std::string &path) {
       throw Error(path, position, "<Piece> without a Source attribute");
     if (lowerCaseExtension(source) != ".vtu")
       throw Error(path, position, "<Piece> names '" + quoteInput(source) + "': expected a .vtu file");
-    pieces.push_back(fs::path(source).is_absolute() ? source : (directory / source).string());
+    const std::string ghosts = node.attribute("uvr_ghosts").value();
+    parts.pieces.push_back(
+        {near(source), ghosts.empty() ? ghosts : near(ghosts), boxOf(numbersOf(node, "uvr_region"))});
   }
-  if (pieces.empty())
+  if (parts.pieces.empty())
     throw Error(path, "", "the file lists no <Piece>");
+  const std::vector<double> cells = numbersOf(grid, "uvr_cells"), step = numbersOf(grid, "uvr_default_step"),
+                            median = numbersOf(grid, "uvr_median_volume"),
+                            leaf = numbersOf(grid, "uvr_leaf_size"),
+                            scales = numbersOf(grid, "uvr_step_scales");
+  if (cells.size() == 1 && step.size() == 1 && median.size() == 1 && leaf.size() == 1 && scales.size() == 2) {
+    parts.cells = uint64_t(cells[0]);
+    parts.bounds = boxOf(numbersOf(grid, "uvr_bounds"));
+    parts.defaultStep = float(step[0]);
+    parts.medianVolume = median[0];
+    parts.leafSize = uint32_t(leaf[0]);
+    parts.stepScales = {scales[0], float(scales[1])};
+    for (const auto &[data, centering] :
+         {std::pair{"PPointData", Centering::Point}, {"PCellData", Centering::Cell}})
+      for (pugi::xml_node array : grid.child(data).children("PDataArray")) {
+        const std::vector<double> range = numbersOf(array, "uvr_range");
+        if (range.size() == 2)
+          parts.fieldRanges.push_back(
+              {{array.attribute("Name").value(), centering}, {float(range[0]), float(range[1])}});
+      }
+  }
+  return parts;
+}
+
+/// The pieces a ParaView partitioned file (.pvtu) names, in its order.
+std::vector<std::string> readPvtu(const std::string &path) {
+  std::vector<std::string> pieces;
+  for (const PartitionedFile::Piece &piece : parsePvtu(path).pieces)
+    pieces.push_back(piece.path);
   return pieces;
 }
 
@@ -281,6 +335,12 @@ Mesh loadSingle(const std::string &path, const LoadOptions &options) {
 }
 
 } // namespace
+
+PartitionedFile readPartitionedFile(const std::string &path) {
+  if (lowerCaseExtension(path) != ".pvtu")
+    throw Error(path, "", "not a partitioned file (.pvtu)");
+  return parsePvtu(path);
+}
 
 int timeStepCount(const std::string &path) {
   const Series series = seriesOf(path);

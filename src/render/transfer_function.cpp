@@ -66,7 +66,8 @@ TransferFunctionView TransferFunction::view() const {
 }
 
 TransferFunctionRangeView TransferFunction::rangeView() const {
-  return {view(), prefixSum_.data(), prefixSquares_.data(), opacityMax_.data()};
+  return {view(),          prefixSum_.data(), prefixSquares_.data(), opacityMax_.data(),
+          varianceLowest_, varianceHighest_};
 }
 
 PartitionMetadata computePartitionMetadata(const Partitions &partitions, const TransferFunction &tf) {
@@ -90,6 +91,12 @@ PartitionMetadata computePartitionMetadata(const Partitions &partitions, const T
     } else {
       ++meta.transparentCount;
     }
+  }
+  meta.varianceLowest = lowest;
+  meta.varianceHighest = highest;
+  if (!std::isnan(ranges.varianceLowest)) {
+    lowest = ranges.varianceLowest;
+    highest = ranges.varianceHighest;
   }
   for (uint32_t i = 0; i < count; ++i)
     meta.sigma[i] = normalizedSigma(variance[i], lowest, highest);

@@ -6,6 +6,7 @@
 #include "core/color_map.h"
 #include "core/host_device.h"
 #include "core/vec.h"
+#include <cmath>
 
 #include <vector>
 
@@ -90,6 +91,9 @@ struct TransferFunctionRangeView {
   const double *prefixSum = nullptr;     ///< 4 per entry plus 4 leading zeros: running sums of r, g, b, a
   const double *prefixSquares = nullptr; ///< likewise, of their squares
   const float *opacityMax = nullptr; ///< level k (at k * size) holds the maximum over entries [i, i + 2^k)
+  /// What the partitions' colour variances are normalised by, where given (TransferFunction::
+  /// setVarianceRange); NaN: their own extremes.
+  float varianceLowest = NAN, varianceHighest = NAN;
 
   /// Highest opacity the function takes over [a, b]; never below the true maximum; 0 for an empty range.
   UVR_HOST_DEVICE float maxOpacity(float a, float b) const {
@@ -156,6 +160,14 @@ public:
   float maxOpacity(float a, float b) const { return rangeView().maxOpacity(a, b); }
   float colorVariance(float a, float b) const { return rangeView().colorVariance(a, b); }
 
+  /// Normalises the partitions' colour variances by [lowest, highest] rather than by their own extremes
+  /// (NaN: their own): a piece of a mesh split among processes takes the whole mesh's, so that its adaptive
+  /// steps are the whole mesh's.
+  void setVarianceRange(float lowest, float highest) {
+    varianceLowest_ = lowest;
+    varianceHighest_ = highest;
+  }
+
 private:
   std::vector<Vec4f> table_;
   float valueMin_, valueMax_;
@@ -163,6 +175,7 @@ private:
   std::vector<float> opacityMax_;                 ///< levels of size() entries each, unused tails zero
   std::vector<Vec4f> extinction_;                 ///< see TransferFunctionView
   std::vector<Vec4f> extinctionIntegral_;
+  float varianceLowest_ = NAN, varianceHighest_ = NAN;
 };
 
 /// nodeMinSigma's mark for a node with a transparent partition below.
@@ -178,6 +191,9 @@ struct PartitionMetadata {
   /// it asks for the finest step, the integrator marches the node's partitions as one (traversePartitions).
   std::vector<float> nodeMinSigma;
   uint32_t transparentCount = 0;
+  /// The extremes of the colour variances over the partitions drawn ({+inf, -inf} where none), whatever
+  /// the normalisation took (TransferFunction::setVarianceRange).
+  float varianceLowest = INFINITY, varianceHighest = -INFINITY;
 };
 
 /// On the host, with all cores; the CUDA backend computes the same on the GPU.

@@ -2,6 +2,7 @@
 
 #include <cub/block/block_reduce.cuh>
 
+#include <cstring>
 #include <vector>
 
 namespace uvr {
@@ -70,14 +71,17 @@ __global__ void partitionMetadataKernel(TransferFunctionRangeView tf, Partitions
 /// Per partition, its sigma from the variance in `sigma`, lowered into the nodes above it as their
 /// nodeMinSigma (set above any sigma beforehand). Sigmas and kTransparentSigma order as their bits do as
 /// signed integers, which lets integer atomics take their minimum.
-__global__ void normalizeSigmaKernel(uint32_t count, const MetadataTotals *totals, const uint32_t *parents,
+__global__ void normalizeSigmaKernel(uint32_t count, const MetadataTotals *totals, float givenLowest,
+                                     float givenHighest, const uint32_t *parents,
                                      const uint32_t *partitionNodes, const float *nodeMaxOpacity,
                                      float *sigma, float *nodeMinSigma) {
   const uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
   if (i >= count)
     return;
-  sigma[i] = normalizedSigma(sigma[i], __uint_as_float(totals->lowestVariance),
-                             __uint_as_float(totals->highestVariance));
+  // The extremes given (a piece of a mesh takes the whole mesh's), else the partitions' own.
+  const bool given = !isnan(givenLowest);
+  sigma[i] = normalizedSigma(sigma[i], given ? givenLowest : __uint_as_float(totals->lowestVariance),
+                             given ? givenHighest : __uint_as_float(totals->highestVariance));
   uint32_t node = partitionNodes[i];
   const float lowest = nodeMaxOpacity[node] > 0.f ? sigma[i] : kTransparentSigma;
   nodeMinSigma[node] = lowest;
@@ -117,8 +121,8 @@ uint32_t DeviceMetadata::update(const TransferFunctionRangeView &tf, const Parti
   UVR_CUDA_CHECK(cudaGetLastError());
   UVR_CUDA_CHECK(cudaMemset(nodeMinSigma.data(), 0x7f, nodeMinSigma.bytes())); // 3.4e38, above any sigma
   normalizeSigmaKernel<<<blocksFor(count, kMetadataBlock), kMetadataBlock>>>(
-      count, totals.data(), kdParents.data(), partitionNodes.data(), nodeMaxOpacity.data(), sigma.data(),
-      nodeMinSigma.data());
+      count, totals.data(), tf.varianceLowest, tf.varianceHighest, kdParents.data(), partitionNodes.data(),
+      nodeMaxOpacity.data(), sigma.data(), nodeMinSigma.data());
   UVR_CUDA_CHECK(cudaGetLastError());
   MetadataTotals reduced{};
   totals.download(&reduced, 1); // waits for the kernels; a fault surfaces here
@@ -142,6 +146,10 @@ PartitionMetadata DeviceMetadata::download(uint32_t count) const {
   MetadataTotals reduced{};
   totals.download(&reduced, 1);
   meta.transparentCount = reduced.transparent;
+  if (reduced.lowestVariance != kEmptyTotals.lowestVariance) { // a partition is drawn
+    std::memcpy(&meta.varianceLowest, &reduced.lowestVariance, sizeof(float));
+    std::memcpy(&meta.varianceHighest, &reduced.highestVariance, sizeof(float));
+  }
   return meta;
 }
 

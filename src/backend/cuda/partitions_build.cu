@@ -15,15 +15,15 @@ constexpr uint32_t kSettled = 0xffffffffu; // a position whose cells have reache
 //
 // The cells are kept in three lists, each sorted by centroid along one axis (ties by cell index). A node's
 // cells occupy the same positions in all three; its median along an axis is the middle of that axis's list,
-// and splitting it is a stable partition of each list by the side its cells fall on, as in the host's
-// nth_element with the same order.
+// moved to the nearer end of the centroids of its value (the host's splitAtValue), and splitting it is a
+// stable partition of each list by the side its cells fall on.
 
 struct LevelNode {
   uint32_t start, count; ///< positions in the sorted lists
   Box3f space;           ///< the node's cell of space
+  uint32_t below = 0;    ///< cells that go below the split, once classified
 
-  __device__ uint32_t half() const { return count / 2; } ///< cells that go below the split
-  __device__ bool goesAbove(uint64_t position) const { return position - start >= half(); }
+  __device__ bool goesAbove(uint64_t position) const { return position - start >= below; }
 };
 
 /// The node of a level (`count` nodes whose ranges of positions are disjoint and in order, as each level is
@@ -44,10 +44,43 @@ __device__ inline uint32_t nodeAt(const LevelNode *level, uint32_t count, uint64
   return p - node.start < node.count ? lo - 1 : kSettled;
 }
 
-__global__ void axisKeysKernel(MeshView mesh, uint64_t cells, int axis, uint32_t *keys) {
+/// Whether `p` lies in `box`, taken half-open as the split assigns centroids (the host's holdsCentroid).
+__device__ bool holdsCentroid(const Box3f &box, Vec3f p) {
+  return box.lower.x <= p.x && p.x < box.upper.x && box.lower.y <= p.y && p.y < box.upper.y &&
+         box.lower.z <= p.z && p.z < box.upper.z;
+}
+
+/// A piece's tree holds the cells whose centroids lie in its root: the others are sorted past them all.
+constexpr uint32_t kOutsideKey = 0xffffffffu; // no finite centroid's ordered bits
+
+__global__ void axisKeysKernel(MeshView mesh, uint64_t cells, int axis, bool piece, Box3f treeRoot,
+                               uint32_t *keys) {
+  const uint64_t c = globalIndex();
+  if (c >= cells)
+    return;
+  const Vec3f centroid = cellCentroid(mesh, c);
+  keys[c] = piece && !holdsCentroid(treeRoot, centroid) ? kOutsideKey : orderedBits(centroid[axis]);
+}
+
+__global__ void insideKernel(MeshView mesh, uint64_t cells, Box3f treeRoot, uint32_t *inside) {
   const uint64_t c = globalIndex();
   if (c < cells)
-    keys[c] = orderedBits(cellCentroid(mesh, c)[axis]);
+    inside[c] = holdsCentroid(treeRoot, cellCentroid(mesh, c)) ? 1u : 0u;
+}
+
+/// The first position in [first, last) of the sorted `list` whose centroid along `axis` is not below `value`
+/// (`orEqual`: above it).
+__device__ uint32_t boundIn(const uint32_t *list, const MeshView &mesh, int axis, uint32_t first,
+                            uint32_t last, float value, bool orEqual) {
+  while (first < last) {
+    const uint32_t middle = first + (last - first) / 2;
+    const float v = cellCentroid(mesh, list[middle])[axis];
+    if (v < value || (orEqual && v == value))
+      first = middle + 1;
+    else
+      last = middle;
+  }
+  return first;
 }
 
 struct SortedLists {
@@ -55,7 +88,7 @@ struct SortedLists {
 };
 
 /// Decides per node of the level whether and where it splits, as the host's TreeBuilder::split.
-__global__ void classifyKernel(const LevelNode *level, uint32_t count, SortedLists lists, MeshView mesh,
+__global__ void classifyKernel(LevelNode *level, uint32_t count, SortedLists lists, MeshView mesh,
                                uint32_t leafSize, int depth, KdNode *decisions, uint32_t *splits) {
   const uint64_t i = globalIndex();
   if (i >= count)
@@ -69,8 +102,17 @@ __global__ void classifyKernel(const LevelNode *level, uint32_t count, SortedLis
       extent[a] = cellCentroid(mesh, lists.axis[a][node.start + node.count - 1])[a] -
                   cellCentroid(mesh, lists.axis[a][node.start])[a];
     const int axis = widestAxis(extent);
-    decision = {cellCentroid(mesh, lists.axis[axis][node.start + node.count / 2])[axis], uint32_t(axis), 0};
-    split = decision.split > node.space.lower[axis] && decision.split < node.space.upper[axis];
+    const uint32_t *list = lists.axis[axis];
+    const uint32_t end = node.start + node.count, middle = node.start + node.count / 2;
+    const float median = cellCentroid(mesh, list[middle])[axis];
+    const uint32_t low = boundIn(list, mesh, axis, node.start, middle, median, false),
+                   high = boundIn(list, mesh, axis, middle, end, median, true);
+    const uint32_t at = high == end || (low != node.start && middle - low <= high - middle) ? low : high;
+    if (at > node.start && at < end) {
+      decision = {cellCentroid(mesh, list[at])[axis], uint32_t(axis), 0};
+      split = decision.split > node.space.lower[axis] && decision.split < node.space.upper[axis];
+      level[i].below = at - node.start;
+    }
   }
   decisions[i] = decision;
   splits[i] = split;
@@ -93,8 +135,8 @@ __global__ void emitKernel(const LevelNode *level, uint32_t count, const KdNode 
     Box3f below = node.space, above = node.space;
     below.upper[int(inner.axis)] = inner.split;
     above.lower[int(inner.axis)] = inner.split;
-    next[2 * rank] = {node.start, node.half(), below};
-    next[2 * rank + 1] = {node.start + node.half(), node.count - node.half(), above};
+    next[2 * rank] = {node.start, node.below, below};
+    next[2 * rank + 1] = {node.start + node.below, node.count - node.below, above};
   } else {
     const uint32_t leaf = leavesBefore + uint32_t(i) - splitRank[i];
     nodes[levelBase + i] = {0.f, KdNode::kLeaf, leaf};
@@ -138,7 +180,7 @@ __global__ void partitionListKernel(uint64_t cells, const LevelNode *level, uint
   }
   const LevelNode node = level[s];
   const uint32_t ones = aboveBefore[p] - aboveBefore[node.start];
-  out[above[cell] ? node.start + node.half() + ones : uint32_t(p) - ones] = cell;
+  out[above[cell] ? node.start + node.below + ones : uint32_t(p) - ones] = cell;
 }
 
 /// What a partition gathers from the cells whose boxes touch it, as ordered bits.
@@ -235,8 +277,12 @@ __global__ void nodeBoundsKernel(uint32_t first, uint32_t count, const KdNode *n
 } // namespace
 
 void DeviceBuilder::partitions() {
-  const float pad = partitionPadding(meshBounds_);
+  // A piece's tree starts from its region's box, as the whole mesh's tree reaches it, over the cells whose
+  // centroids lie there (as the host builds it).
+  const bool piece = !mesh_.pieceRegion.empty();
+  const float pad = partitionPadding(piece ? mesh_.pieceWholeBounds : meshBounds_);
   const Box3f root = padded(meshBounds_, pad);
+  const Box3f treeRoot = piece ? intersection(mesh_.pieceRegion, padded(mesh_.pieceWholeBounds, pad)) : root;
   out_.partitions.rootBounds = root;
 
   // The three sorted lists; a spare list that each partitioned list is written to, swapped with it; the
@@ -247,7 +293,7 @@ void DeviceBuilder::partitions() {
     DeviceBuffer<uint32_t> keys;
     keys.resize(cells_);
     for (int axis = 0; axis < 3; ++axis) {
-      axisKeysKernel<<<cellBlocks(), kBlock>>>(mesh_, cells_, axis, keys.data());
+      axisKeysKernel<<<cellBlocks(), kBlock>>>(mesh_, cells_, axis, piece, treeRoot, keys.data());
       UVR_CUDA_CHECK(cudaGetLastError());
       sortCells(keys, 32, lists[axis]);
     }
@@ -255,9 +301,20 @@ void DeviceBuilder::partitions() {
   spare.resize(cells_);
   aboveBefore.resize(cells_);
   above.resize(cells_);
+  // The cells outside a piece's tree, last in every list, lie in no node: they take no part.
+  uint64_t inTree = cells_;
+  if (piece && cells_ > 0) {
+    insideKernel<<<cellBlocks(), kBlock>>>(mesh_, cells_, treeRoot, aboveBefore.data());
+    UVR_CUDA_CHECK(cudaGetLastError());
+    scratch_.run([&](void *storage, size_t &bytes) {
+      return cub::DeviceScan::InclusiveSum(storage, bytes, aboveBefore.data(), aboveBefore.data(),
+                                           int64_t(cells_));
+    });
+    inTree = downloadOne(aboveBefore.data() + cells_ - 1);
+  }
 
   DeviceBuffer<LevelNode> level, next;
-  const LevelNode rootNode{0, uint32_t(cells_), root};
+  const LevelNode rootNode{0, uint32_t(inTree), treeRoot};
   level.upload(&rootNode, 1);
   DeviceBuffer<KdNode> nodes, decisions;
   DeviceBuffer<Box3f> leafSpace;
