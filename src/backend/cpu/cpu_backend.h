@@ -15,6 +15,7 @@ public:
   uint32_t setTransferFunction(const TransferFunction &tf) override;
   uint32_t setField(const MeshView &view) override;
   void setGradients(const Vec3f *gradients, uint64_t) override { gradients_ = gradients; }
+  uint32_t setIsoSurfaces(const IsoSettings &iso) override;
   SampleTotals render(const CameraView &camera, const IntegratorSettings &settings,
                       const ShadingSettings &shading, const PixelTarget &target, double &kernelMs) override;
   uint32_t partitionCount() const override { return accel_.partitions.count(); }
@@ -35,6 +36,7 @@ private:
   double buildMs_ = 0.0;
   std::optional<TransferFunction> tf_;
   PartitionMetadata metadata_;
+  IsoSettings iso_;
 };
 
 } // namespace uvr
