@@ -140,10 +140,11 @@ struct RayMarch : ShadeState<kShade || kIso>, IsoState<kIso> {
     if constexpr (kIso) {
       // Where this interval does not go on from the last one, what lies between is skipped (its range holds
       // no surface) or outside the mesh: the field there is unknown, and a surface ahead of the first sample
-      // is found from a point just inside the interval.
+      // is found from a point just inside the interval: past the intervals' margin, which may reach a little
+      // out of the mesh.
       if (!(fabsf(ta - this->intervalEnd) <= 0.01f * spacing)) {
         this->lastValid = false;
-        const float tProbe = ta + 0.01f * spacing;
+        const float tProbe = ta + 0.02f * spacing;
         float value;
         if (tProbe < grid.at(kStart)) {
           ++samples;
