@@ -63,7 +63,7 @@ def main():
             middle = f"{0.5 * (low + high):g}"
             images = {}
             for name, extra in [("iso", ["--iso", middle]),
-                                ("two", ["--iso", f"{middle},{0.5 * (low + middle):g}", "--iso-color", "1,0,0",
+                                ("two", ["--iso", f"{middle},{0.75 * low + 0.25 * high:g}", "--iso-color", "1,0,0",
                                          "--iso-opacity", "0.5", "--light", "1,1,1"]),
                                 ("only", ["--iso", middle, "--iso-only"])]:
                 path = os.path.join(tmp, name + ".png")

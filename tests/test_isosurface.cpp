@@ -116,8 +116,9 @@ TEST(Isosurface, OfASphereIsClosedFromEveryView) {
   // outside it does not.
   const float radius = 0.6f;
   for (CellType type : {CellType::Tetra, CellType::Hexahedron}) {
-    const Mesh mesh =
-        buildMesh(makeBoxGrid(type, 12, kBox, [](Vec3f p) { return length(p); }, 0.3f), "sphere");
+    const Mesh mesh = buildMesh(makeBoxGrid(
+                                    type, 12, kBox, [](Vec3f p) { return length(p); }, 0.3f),
+                                "sphere");
     Renderer renderer(mesh, mesh.findField("f"), 16);
     renderer.setTransferFunction(transparent());
     renderer.prepare(Backend::Cpu);
@@ -136,9 +137,9 @@ TEST(Isosurface, OfASphereIsClosedFromEveryView) {
             const float opacity = frame.opacity[size_t(y) * size_t(settings.width) + size_t(x)];
             if (miss < radius - 0.03f) {
               ++inside;
-              ASSERT_EQ(opacity, 1.f) << "a hole: cells " << int(type) << ", mode " << modeName(mode)
-                                      << ", eye " << eye.x << "," << eye.y << "," << eye.z << ", pixel " << x
-                                      << "," << y;
+              ASSERT_EQ(opacity, 1.f)
+                  << "a hole: cells " << int(type) << ", mode " << modeName(mode) << ", eye " << eye.x << ","
+                  << eye.y << "," << eye.z << ", pixel " << x << "," << y;
             } else if (miss > radius + 0.03f) {
               ASSERT_EQ(opacity, 0.f) << "cells " << int(type) << ", pixel " << x << "," << y;
             }
@@ -150,8 +151,9 @@ TEST(Isosurface, OfASphereIsClosedFromEveryView) {
 }
 
 TEST(Isosurface, SkippingMarchesTransparentPartitionsThatHoldASurface) {
-  const Mesh mesh =
-      buildMesh(makeBoxGrid(CellType::Tetra, 12, kBox, [](Vec3f p) { return length(p); }, 0.3f), "sphere");
+  const Mesh mesh = buildMesh(makeBoxGrid(
+                                  CellType::Tetra, 12, kBox, [](Vec3f p) { return length(p); }, 0.3f),
+                              "sphere");
   Renderer renderer(mesh, mesh.findField("f"), 16);
   renderer.setTransferFunction(transparent());
   const Camera camera = cameraAt({0.f, 0.f, 4.f});
@@ -185,8 +187,9 @@ TEST(Isosurface, SkippingMarchesTransparentPartitionsThatHoldASurface) {
 TEST(Isosurface, CompositesInDepthOrderWithTheVolume) {
   // Two nested spheres in a translucent volume: the outer one, opaque, hides the inner one, and what lies
   // in front of it still tints the image; the volume hidden, only the lit surface is left.
-  const Mesh mesh =
-      buildMesh(makeBoxGrid(CellType::Tetra, 12, kBox, [](Vec3f p) { return length(p); }, 0.3f), "sphere");
+  const Mesh mesh = buildMesh(makeBoxGrid(
+                                  CellType::Tetra, 12, kBox, [](Vec3f p) { return length(p); }, 0.3f),
+                              "sphere");
   Renderer renderer(mesh, mesh.findField("f"), 16);
   renderer.setTransferFunction(translucent());
   const Camera camera = cameraAt({0.f, 0.f, 4.f});
@@ -213,8 +216,9 @@ TEST(Isosurface, CudaAgreesWithTheCpu) {
   if (!backendAvailable(Backend::Cuda) || cudaDeviceCount() == 0)
     GTEST_SKIP() << "no CUDA backend or GPU";
   for (CellType type : {CellType::Tetra, CellType::Hexahedron}) {
-    const Mesh mesh =
-        buildMesh(makeBoxGrid(type, 12, kBox, [](Vec3f p) { return length(p); }, 0.3f), "sphere");
+    const Mesh mesh = buildMesh(makeBoxGrid(
+                                    type, 12, kBox, [](Vec3f p) { return length(p); }, 0.3f),
+                                "sphere");
     Renderer renderer(mesh, mesh.findField("f"), 16);
     renderer.setTransferFunction(translucent());
     for (bool hide : {true, false}) {

@@ -28,8 +28,8 @@ Vec3f parseVector(const std::string &text, const std::string &option) {
 }
 
 std::vector<float> parseIsoValues(const std::string &text) {
-  const std::string expected =
-      "--iso expects up to " + std::to_string(kMaxIsoSurfaces) + " finite numbers V[,V...], got '" + text + "'";
+  const std::string expected = "--iso expects up to " + std::to_string(kMaxIsoSurfaces) +
+                               " finite numbers V[,V...], got '" + text + "'";
   std::vector<float> values;
   std::istringstream in(text);
   std::string item;
@@ -147,9 +147,10 @@ void addRenderOptions(CLI::App *cmd, RenderOptions &o, bool timeRanges) {
   cmd->add_flag("--shade", o.shade,
                 "Light the volume by the field's gradient (Blinn-Phong: ambient 0.2, diffuse 0.7, specular "
                 "0.2, shininess 16)");
-  cmd->add_option("--light", o.light,
-                  "With --shade or --iso, direction towards the light X,Y,Z in camera space: x right, y up, z "
-                  "towards the viewer (default: a headlight at the eye)");
+  cmd->add_option(
+      "--light", o.light,
+      "With --shade or --iso, direction towards the light X,Y,Z in camera space: x right, y up, z "
+      "towards the viewer (default: a headlight at the eye)");
   cmd->add_option("--iso", o.iso,
                   "Isosurfaces at these field values V[,V...] (at most 8), lit by the field's gradient and "
                   "composited with the volume");

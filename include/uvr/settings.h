@@ -106,7 +106,8 @@ struct FrameSettings {
   /// along a ray, lit by the field's gradient as its normal (Blinn-Phong from `light`, with or without
   /// `shade`) and composited with the volume at its depth (docs/design.md, "Isosurfaces").
   std::vector<float> isoValues;
-  /// Every isosurface's colour, R,G,B in [0, 1]; unset: each takes the transfer function's colour at its value.
+  /// Every isosurface's colour, R,G,B in [0, 1]; unset: each takes the transfer function's colour at its
+  /// value.
   std::optional<Vec3f> isoColor;
   float isoOpacity = 1.f; ///< of each isosurface, in (0, 1]
   /// Draw the isosurfaces alone: the volume is hidden, and only partitions that hold a surface are marched.

@@ -379,11 +379,10 @@ private:
 /// ray's at the next one's. `kShade`: light the samples by the field's gradient as `shading` says. `kIso`:
 /// draw the isosurfaces `iso`, and light the samples where settings.shade.
 template <class Sampling, bool kPreintegrate = false, bool kShade = false, bool kIso = false>
-UVR_HOST_DEVICE inline RayResult integrateRay(const SceneView &scene, const IntegratorSettings &settings,
-                                              const Ray &ray, uint32_t &hint,
-                                              const BoundaryCrossings &crossings, CellTrail trail = {},
-                                              const ShadingSettings *shading = nullptr,
-                                              const IsoSettings *iso = nullptr) {
+UVR_HOST_DEVICE inline RayResult
+integrateRay(const SceneView &scene, const IntegratorSettings &settings, const Ray &ray, uint32_t &hint,
+             const BoundaryCrossings &crossings, CellTrail trail = {},
+             const ShadingSettings *shading = nullptr, const IsoSettings *iso = nullptr) {
   RayIntervals intervals(scene, settings, ray, crossings);
   if (intervals.none())
     return {};

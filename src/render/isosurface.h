@@ -50,8 +50,6 @@ struct IsoSettings {
 constexpr float kIsoVisitOpacity = 1e-20f;
 
 /// Whether the field crosses `value` between samples `a` and `b` (one may equal it, not both).
-UVR_HOST_DEVICE inline bool crossesValue(float a, float b, float value) {
-  return (a < value) != (b < value);
-}
+UVR_HOST_DEVICE inline bool crossesValue(float a, float b, float value) { return (a < value) != (b < value); }
 
 } // namespace uvr

@@ -28,8 +28,8 @@ struct ShadingSettings {
 };
 
 /// The colour `rgb` lit where the surface's unit normal is `normal`, seen along `toEye` (unit, from the point
-/// towards the eye): Blinn-Phong with a white light, two-sided (the gradient's sign says nothing of which side
-/// a surface faces the eye).
+/// towards the eye): Blinn-Phong with a white light, two-sided (the gradient's sign says nothing of which
+/// side a surface faces the eye).
 UVR_HOST_DEVICE inline Vec3f blinnPhong(Vec3f rgb, Vec3f normal, Vec3f toEye, const ShadingSettings &s) {
   const Vec3f light = s.headlight ? toEye : s.light;
   const Vec3f half = s.headlight ? toEye : normalize(light + toEye);

@@ -94,7 +94,8 @@ PartitionMetadata computePartitionMetadata(const Partitions &partitions, const T
   for (uint32_t i = 0; i < count; ++i) {
     meta.sigma[i] = normalizedSigma(variance[i], lowest, highest);
     // After the normalisation: the surfaces change which partitions are marched, not the volume's steps.
-    if (iso && !(meta.maxOpacity[i] > 0.f) && iso->crossesRange(partitions.valueMin[i], partitions.valueMax[i]))
+    if (iso && !(meta.maxOpacity[i] > 0.f) &&
+        iso->crossesRange(partitions.valueMin[i], partitions.valueMax[i]))
       meta.maxOpacity[i] = kIsoVisitOpacity;
     if (!(meta.maxOpacity[i] > 0.f))
       ++meta.transparentCount;

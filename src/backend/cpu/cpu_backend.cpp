@@ -110,12 +110,13 @@ SampleTotals CpuBackend::render(const CameraView &camera, const IntegratorSettin
                           : BoundaryCrossings{};
             // A ray that crosses no boundary face is done at once.
             const RayResult result =
-                along.none()   ? RayResult{}
-                : settings.iso ? settings.preintegrate
-                                     ? integrateRay<HostSampling, true, false, true>(scene, settings, ray, hint,
-                                                                                     along, trail, &lit, &iso_)
-                                     : integrateRay<HostSampling, false, false, true>(scene, settings, ray, hint,
-                                                                                      along, trail, &lit, &iso_)
+                along.none() ? RayResult{}
+                : settings.iso
+                    ? settings.preintegrate
+                          ? integrateRay<HostSampling, true, false, true>(scene, settings, ray, hint, along,
+                                                                          trail, &lit, &iso_)
+                          : integrateRay<HostSampling, false, false, true>(scene, settings, ray, hint, along,
+                                                                           trail, &lit, &iso_)
                 : settings.shade ? settings.preintegrate
                                        ? integrateRay<HostSampling, true, true>(scene, settings, ray, hint,
                                                                                 along, trail, &lit)
