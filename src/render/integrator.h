@@ -58,6 +58,7 @@ template <bool kIso> struct IsoState {}; ///< no surfaces, nothing
 template <> struct IsoState<true> {
   const IsoSettings *iso;
   float lastT = 0.f, lastValue = 0.f;
+  RayCell lastCell;              ///< the cell of the last point: a crossing there is closed-form too
   bool lastValid = false;        ///< whether a cell held the last point, and the field is continuous since
   float intervalEnd = -INFINITY; ///< where the last interval marched ends
 };
@@ -148,7 +149,7 @@ struct RayMarch : ShadeState<kShade || kIso>, IsoState<kIso> {
         float value;
         if (tProbe < grid.at(kStart)) {
           ++samples;
-          const bool inside = sampler.probe(tProbe, walkSteps, true, value);
+          const bool inside = sampler.probe(tProbe, walkSteps, far, value);
           isoAt(color, samples, tProbe, value, inside, walkSteps);
         }
       }
@@ -301,6 +302,8 @@ private:
     this->lastT = t;
     this->lastValue = value;
     this->lastValid = inside;
+    const RayCell before = this->lastCell;
+    this->lastCell = sampler.at;
     if (!bracket)
       return;
     const IsoSettings &iso = *this->iso;
@@ -311,7 +314,7 @@ private:
       const uint32_t i = rising ? j : iso.count - 1 - j;
       if (!crossesValue(v0, value, iso.values[i]))
         continue;
-      const float hit = isoCrossing(iso.values[i], t0, v0, t, value, samples, walkSteps);
+      const float hit = isoCrossing(iso.values[i], t0, v0, t, value, before, samples, walkSteps);
       moved = true;
       const Vec3f gradient = sampler.pointVectorAt(this->shading->gradients, hit);
       const Vec3f rgb = shadeSurface(iso.colors[i], gradient, this->toEye, *this->shading);
@@ -323,27 +326,38 @@ private:
       sampler.at = atSample; // the sample's own cell, for its gradient and the next walk
   }
 
-  /// Where the field crosses `target` between `t0` (value `v0`) and `t1` (`v1`), from the sampler in `t1`'s
-  /// cell: in a tet the field is linear along the ray, so the root is closed-form once the tet that holds it
-  /// is found; each step locates the best guess so far (that root, else regula falsi, every other step a
-  /// bisection) and keeps the bracket around the crossing. The sampler ends in (or next to) its cell.
-  UVR_HOST_DEVICE float isoCrossing(float target, float t0, float v0, float t1, float v1, uint32_t &samples,
-                                    int walkSteps) {
+  /// Where `cell`, a tet the walk passed on the ray, holds the crossing of `target` in [lo, hi]: the field
+  /// is linear along the ray there, and the root closed-form. A root outside the bracket is another crossing,
+  /// of a field that turns between the samples. `root` is set wherever the tet's field has a slope.
+  UVR_HOST_DEVICE static bool rootInTet(const RayCell &cell, float target, float lo, float hi, float &root) {
+    if (!cell.affine || cell.dvalue == 0.f)
+      return false;
+    root = cell.t + (target - cell.value) / cell.dvalue;
+    const float slack = 1e-4f * (hi - lo); // rounding
+    float w[4], lowest;
+    cell.weightsAt(root, w, lowest);
+    return lowest >= -kInsideTolerance && root >= lo - slack && root <= hi + slack;
+  }
+
+  /// Where the field crosses `target` between `t0` (value `v0`, in cell `cell0`) and `t1` (`v1`), from the
+  /// sampler in `t1`'s cell: in a tet the field is linear along the ray, so the root is closed-form once the
+  /// tet that holds it is found (mostly one of the two); each step locates the best guess so far (that root,
+  /// else regula falsi, every other step a bisection) and keeps the bracket around the crossing. The sampler
+  /// ends in (or next to) its cell.
+  UVR_HOST_DEVICE float isoCrossing(float target, float t0, float v0, float t1, float v1,
+                                    const RayCell &cell0, uint32_t &samples, int walkSteps) {
     float lo = t0, hi = t1, fLo = v0 - target, fHi = v1 - target;
+    float root;
+    if (rootInTet(cell0, target, lo, hi, root)) {
+      sampler.at = cell0; // for the gradient there
+      return clampf(root, lo, hi);
+    }
     for (int step = 0; step < kIsoRefineSteps; ++step) {
-      const RayCell &at = sampler.at;
       float t = lo - fLo * (hi - lo) / (fHi - fLo);
-      if (at.affine && at.dvalue != 0.f) {
-        const float root = at.t + (target - at.value) / at.dvalue;
-        // In the bracket (up to rounding) and in the tet: the crossing. A root outside the bracket is another
-        // crossing, of a field that turns between the samples.
-        const float slack = 1e-4f * (hi - lo);
-        float w[4], lowest;
-        at.weightsAt(root, w, lowest);
-        if (lowest >= -kInsideTolerance && root >= lo - slack && root <= hi + slack)
-          return clampf(root, lo, hi);
+      if (rootInTet(sampler.at, target, lo, hi, root))
+        return clampf(root, lo, hi);
+      if (sampler.at.affine && sampler.at.dvalue != 0.f)
         t = root;
-      }
       if ((step & 1) || !(lo < t && t < hi))
         t = 0.5f * (lo + hi);
       ++samples;

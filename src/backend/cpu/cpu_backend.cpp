@@ -81,10 +81,7 @@ SampleTotals CpuBackend::render(const CameraView &camera, const IntegratorSettin
   const Box3f &bounds = settings.clip.empty() ? scene.partitions.rootBounds : settings.gridBounds;
   const float gridPoints =
       length(bounds.upper - bounds.lower) / gridSpacing(settings, scene.partitions) + 2.f;
-  // None for isosurfaces alone: a ray takes a few samples up to its first surface, too few for the trail
-  // to pay for its buffers.
-  const bool trailed = scene.tetNeighbors && !(settings.iso && iso_.hideVolume);
-  const uint32_t trailSize = trailed ? uint32_t(minf(gridPoints, float(1 << 20))) : 0;
+  const uint32_t trailSize = scene.tetNeighbors ? uint32_t(minf(gridPoints, float(1 << 20))) : 0;
   tbb::parallel_for(
       tbb::blocked_range2d<int>(0, camera.height, kTile, 0, camera.width, kTile),
       [&](const tbb::blocked_range2d<int> &tile) {
