@@ -378,7 +378,9 @@ public:
                               const py::object &mode, const py::object &s1, const py::object &s2,
                               const py::object &p, const py::object &unit, const py::object &size,
                               const py::object &background, const py::object &compositing,
-                              const py::object &steps, const py::object &shade, const py::object &light) {
+                              const py::object &steps, const py::object &shade, const py::object &light,
+                              const py::object &iso, const py::object &isoColor, const py::object &isoOpacity,
+                              const py::object &isoOnly) {
     // Every keyword is checked here, naming it, before any work (uvr.Error).
     std::vector<int64_t> sides;
     try {
@@ -400,6 +402,33 @@ public:
     settings.shade = shade.cast<bool>();
     if (!light.is_none())
       settings.light = toVec3(light, "light");
+    if (!iso.is_none()) {
+      try {
+        settings.isoValues = iso.cast<std::vector<float>>();
+      } catch (const py::cast_error &) {
+        throw Error("iso expects a list of numbers or None");
+      }
+      if (settings.isoValues.empty())
+        throw Error("iso expects at least one value (None: no isosurfaces)");
+    }
+    if (!isoColor.is_none()) {
+      settings.isoColor = toVec3(isoColor, "iso_color");
+      for (const float c : {settings.isoColor->x, settings.isoColor->y, settings.isoColor->z})
+        if (!(c >= 0.f && c <= 1.f))
+          throw Error("iso_color expects (r, g, b) each in [0, 1]");
+    }
+    try {
+      settings.isoOpacity = isoOpacity.cast<float>();
+    } catch (const py::cast_error &) {
+      settings.isoOpacity = NAN;
+    }
+    if (!(settings.isoOpacity > 0.f && settings.isoOpacity <= 1.f))
+      throw Error("iso_opacity expects a number in (0, 1]");
+    if (!py::isinstance<py::bool_>(isoOnly))
+      throw Error("iso_only expects True or False");
+    settings.isoOnly = isoOnly.cast<bool>();
+    if (settings.isoOnly && settings.isoValues.empty())
+      throw Error("iso_only needs iso values to draw");
     settings.mode = parseMode(mode.cast<std::string>());
     if (!py::isinstance<py::str>(compositing))
       throw Error("compositing expects auto, point or preintegrated");
@@ -648,9 +677,12 @@ PYBIND11_MODULE(uvr, m) {
            py::arg("size") = std::pair<int, int>(1024, 1024),
            py::arg("background") = py::make_tuple(0.f, 0.f, 0.f), py::arg("compositing") = "auto",
            py::arg("steps") = "auto", py::arg("shade") = false, py::arg("light") = py::none(),
+           py::arg("iso") = py::none(), py::arg("iso_color") = py::none(), py::arg("iso_opacity") = 1.f,
+           py::arg("iso_only") = false,
            "Returns an (h, w, 4) uint8 array: RGB composited over the background, and accumulated opacity x "
            "255. shade: light by the field's gradient; light: (x, y, z) towards the light in camera space "
-           "(None: a headlight)")
+           "(None: a headlight); iso: field values whose isosurfaces to draw (at most 8), in iso_color "
+           "(None: the transfer function's colour at each) and of iso_opacity; iso_only: the surfaces alone")
       .def("set_field", &PyRenderer::setField, py::arg("mesh"), py::arg("field") = py::none(),
            "Renders `field` of `mesh` (a later time step, or other values on the same grid) keeping the "
            "acceleration data: only the partitions' value ranges are recomputed. Its points and cells must "

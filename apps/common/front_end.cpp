@@ -34,6 +34,8 @@ nlohmann::json frameStatsJson(const FrameStats &s) {
       {"leaf_size", s.leafSize},
       {"shaded", s.shaded},
       {"gradient_bytes", s.gradientBytes},
+      {"iso_surfaces", s.isoSurfaces},
+      {"iso_only", s.isoOnly},
       {"field", s.field},
       {"range", {s.range.min, s.range.max}},
       {"backend", backendName(s.backend)},

@@ -27,6 +27,24 @@ Vec3f parseVector(const std::string &text, const std::string &option) {
   return v;
 }
 
+std::vector<float> parseIsoValues(const std::string &text) {
+  const std::string expected = "--iso expects up to " + std::to_string(kMaxIsoSurfaces) +
+                               " finite numbers V[,V...], got '" + text + "'";
+  std::vector<float> values;
+  std::istringstream in(text);
+  std::string item;
+  while (std::getline(in, item, ',')) {
+    std::istringstream number(item);
+    float value;
+    if (!(number >> value) || !(number >> std::ws).eof() || !std::isfinite(value))
+      throw Error(expected);
+    values.push_back(value);
+  }
+  if (values.empty() || values.size() > kMaxIsoSurfaces || text.back() == ',')
+    throw Error(expected);
+  return values;
+}
+
 void parseSize(const std::string &text, int &width, int &height) {
   char x = 0;
   std::istringstream in(text);
@@ -136,9 +154,19 @@ void addRenderOptions(CLI::App *cmd, RenderOptions &o, bool timeRanges) {
   cmd->add_flag("--shade", o.shade,
                 "Light the volume by the field's gradient (Blinn-Phong: ambient 0.2, diffuse 0.7, specular "
                 "0.2, shininess 16)");
-  cmd->add_option("--light", o.light,
-                  "With --shade, direction towards the light X,Y,Z in camera space: x right, y up, z towards "
-                  "the viewer (default: a headlight at the eye)");
+  cmd->add_option(
+      "--light", o.light,
+      "With --shade or --iso, direction towards the light X,Y,Z in camera space: x right, y up, z "
+      "towards the viewer (default: a headlight at the eye)");
+  cmd->add_option("--iso", o.iso,
+                  "Isosurfaces at these field values V[,V...] (at most 8), lit by the field's gradient and "
+                  "composited with the volume");
+  cmd->add_option("--iso-color", o.isoColor,
+                  "Colour R,G,B of the isosurfaces, each in [0, 1] (default: the transfer function's at each "
+                  "value)");
+  cmd->add_option("--iso-opacity", o.isoOpacity, "Opacity of each isosurface, in (0, 1]")
+      ->capture_default_str();
+  cmd->add_flag("--iso-only", o.isoOnly, "Draw the isosurfaces alone, the volume hidden");
 }
 
 LoadedMesh loadForRendering(const RenderOptions &o) { return loadForRendering(o, o.timeStep); }
@@ -187,11 +215,27 @@ FrameSettings parseFrameSettings(const RenderOptions &o) {
     if (!(c >= 0.f && c <= 1.f))
       throw Error("--background expects R,G,B each in [0, 1], got '" + o.background + "'");
   settings.shade = o.shade;
+  if (o.iso)
+    settings.isoValues = parseIsoValues(*o.iso);
   if (!o.light.empty()) {
     settings.light = parseVector(o.light, "light");
-    if (!o.shade)
-      throw Error("--light needs --shade");
+    if (!o.shade && !o.iso)
+      throw Error("--light needs --shade (or --iso)");
   }
+  if (!o.isoColor.empty()) {
+    if (!o.iso)
+      throw Error("--iso-color needs --iso");
+    settings.isoColor = parseVector(o.isoColor, "iso-color");
+    for (const float c : {settings.isoColor->x, settings.isoColor->y, settings.isoColor->z})
+      if (!(c >= 0.f && c <= 1.f))
+        throw Error("--iso-color expects R,G,B each in [0, 1], got '" + o.isoColor + "'");
+  }
+  if (!(o.isoOpacity > 0.f && o.isoOpacity <= 1.f))
+    throw Error("--iso-opacity expects a number in (0, 1], got " + CLI::detail::to_string(o.isoOpacity));
+  settings.isoOpacity = o.isoOpacity;
+  if (o.isoOnly && !o.iso)
+    throw Error("--iso-only needs --iso");
+  settings.isoOnly = o.isoOnly;
   settings.mode = parseMode(o.mode);
   settings.compositing = parseCompositing(o.compositing);
   settings.steps = parseStepSizing(o.steps);

@@ -8,6 +8,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -33,7 +34,11 @@ struct RenderOptions {
   std::string background = "0,0,0";
   std::string backend = "cpu";
   bool shade = false;
-  std::string light; ///< X,Y,Z in camera space; empty: the headlight
+  std::string light;              ///< X,Y,Z in camera space; empty: the headlight
+  std::optional<std::string> iso; ///< V[,V...]; unset: no isosurfaces (given empty is an error)
+  std::string isoColor;           ///< R,G,B; empty: the transfer function's colour at each value
+  float isoOpacity = 1.f;
+  bool isoOnly = false;
 };
 
 /// Registers MESH and the options that describe a view (field, transfer function, sampling, camera, size);

@@ -37,6 +37,10 @@ struct Controls {
   RenderMode mode = RenderMode::Full;
   float s1 = 0.f, s2 = 0.f, p = 0.f; ///< 0: the default
   bool shade = false;
+  /// Isosurfaces: drawn or not, the first one's value (the others as --iso gave them), the volume hidden.
+  bool iso = false;
+  float isoValue = 0.f;
+  bool isoOnly = false;
   bool heatmap = false;
 };
 
@@ -49,8 +53,8 @@ bool sameView(const ViewState &a, const ViewState &b) {
          a.colorMap.opacityPoints == b.colorMap.opacityPoints &&
          a.colorMap.colorSpace == b.colorMap.colorSpace && a.range.min == b.range.min &&
          a.range.max == b.range.max && i.mode == j.mode && i.s1 == j.s1 && i.s2 == j.s2 && i.p == j.p &&
-         i.unit == j.unit && i.shade == j.shade && a.settings.width == b.settings.width &&
-         a.settings.height == b.settings.height;
+         i.unit == j.unit && i.shade == j.shade && i.isoValues == j.isoValues && i.isoOnly == j.isoOnly &&
+         a.settings.width == b.settings.width && a.settings.height == b.settings.height;
 }
 
 nlohmann::json vectorJson(Vec3f v) { return {v.x, v.y, v.z}; }
@@ -103,6 +107,10 @@ public:
     controls_.s2 = setup.settings.s2;
     controls_.p = setup.settings.p;
     controls_.shade = setup.settings.shade;
+    controls_.iso = !setup.settings.isoValues.empty();
+    controls_.isoValue =
+        controls_.iso ? setup.settings.isoValues[0] : 0.5f * (setup.range.min + setup.range.max);
+    controls_.isoOnly = setup.settings.isoOnly;
     presets_ = builtinColorMapNames();
     for (const ColorMap &map : setup.presets)
       presets_.push_back(map.name);
@@ -159,6 +167,14 @@ private:
     state.settings.s2 = controls_.s2;
     state.settings.p = controls_.p;
     state.settings.shade = controls_.shade;
+    if (controls_.iso) {
+      if (state.settings.isoValues.empty())
+        state.settings.isoValues.push_back(controls_.isoValue);
+      state.settings.isoValues[0] = controls_.isoValue;
+    } else {
+      state.settings.isoValues.clear();
+    }
+    state.settings.isoOnly = controls_.iso && controls_.isoOnly;
     state.settings = withDefaultSampling(state.settings, setup_.defaultStep, setup_.defaultUnit);
     return state;
   }
@@ -286,6 +302,15 @@ private:
     if (ImGui::Combo("Mode", &mode, modes, 4))
       controls_.mode = parseMode(modes[mode]);
     ImGui::Checkbox("Shade", &controls_.shade);
+    ImGui::Checkbox("Isosurface", &controls_.iso);
+    if (controls_.iso) {
+      ImGui::SameLine();
+      ImGui::Checkbox("alone", &controls_.isoOnly);
+      ImGui::SetNextItemWidth(150.f);
+      const float span = controls_.range.max - controls_.range.min;
+      ImGui::DragFloat("Iso value", &controls_.isoValue, 0.002f * span, controls_.range.min,
+                       controls_.range.max, "%.4g");
+    }
     const float step = setup_.defaultStep;
     ImGui::SetNextItemWidth(150.f);
     ImGui::DragFloat("s1", &controls_.s1, step * 0.01f, step * 0.05f, step * 16.f, "%.4g");

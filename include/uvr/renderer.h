@@ -36,6 +36,8 @@ struct FrameStats {
   uint32_t leafSize = 0;
   bool shaded = false;        ///< lit by the field's gradient (FrameSettings::shade)
   uint64_t gradientBytes = 0; ///< host memory of the gradient per point; 0 until a frame is shaded
+  uint32_t isoSurfaces = 0;   ///< isosurfaces drawn (FrameSettings::isoValues)
+  bool isoOnly = false;       ///< the volume hidden (FrameSettings::isoOnly)
   std::string field;
   ValueRange range; ///< what the transfer function spans
   Backend backend = Backend::Cpu;

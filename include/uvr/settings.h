@@ -4,8 +4,10 @@
 #include <uvr/vec.h>
 
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <string>
+#include <vector>
 
 namespace uvr {
 
@@ -73,6 +75,8 @@ enum class MemoryLayout : uint8_t {
 const char *memoryLayoutName(MemoryLayout layout);
 /// Parses auto|default|lean; throws uvr::Error otherwise.
 MemoryLayout parseMemoryLayout(const std::string &name);
+/// The most isosurfaces a frame draws (FrameSettings::isoValues).
+constexpr uint32_t kMaxIsoSurfaces = 8;
 
 /// A leaf size that asks for the default: the cell count / 256, at least 64 (about 256 partitions).
 constexpr uint32_t kAutoLeafSize = 0;
@@ -109,6 +113,16 @@ struct FrameSettings {
   Vec3f light{0.f, 0.f, 0.f};
   float ambient = 0.2f, diffuse = 0.7f, specular = 0.2f; ///< Blinn-Phong's coefficients, >= 0
   float shininess = 16.f;                                ///< the specular exponent, >= 1
+  /// Field values whose isosurfaces to draw (at most 8, finite): each is found where the field crosses it
+  /// along a ray, lit by the field's gradient as its normal (Blinn-Phong from `light`, with or without
+  /// `shade`) and composited with the volume at its depth (docs/design.md, "Isosurfaces").
+  std::vector<float> isoValues;
+  /// Every isosurface's colour, R,G,B in [0, 1]; unset: each takes the transfer function's colour at its
+  /// value.
+  std::optional<Vec3f> isoColor;
+  float isoOpacity = 1.f; ///< of each isosurface, in (0, 1]
+  /// Draw the isosurfaces alone: the volume is hidden, and only partitions that hold a surface are marched.
+  bool isoOnly = false;
 };
 
 /// `settings` with its defaults filled in (0 for s1, s2, p or unit) for a mesh of default step `defaultStep`
@@ -126,7 +140,9 @@ float defaultUnitDistance(const Box3f &bounds, uint64_t cells);
 /// Throws uvr::Error for settings no frame can be drawn with: a negative or non-finite s1, s2, p or unit (0
 /// asks for the default), s2 < s1 or p < 1 where both are given, a size outside 1..16384, or a background
 /// outside [0, 1], ray limits that are not one non-negative number (or +inf) per pixel, a non-finite light,
-/// a negative shading coefficient or a shininess below 1. The message names the setting.
+/// a negative shading coefficient or a shininess below 1, more than 8 or non-finite isosurface values, an
+/// isosurface colour outside [0, 1] or opacity outside (0, 1], or isoOnly without isosurface values. The
+/// message names the setting.
 void validateSettings(const FrameSettings &settings);
 
 } // namespace uvr

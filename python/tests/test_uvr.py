@@ -276,6 +276,10 @@ BAD_NUMBERS = [0, -1, float("nan"), float("inf"), "abc", [1, 2]]
     ("steps", ["bogus", 3, None]),
     ("shade", ["yes", 1, None]),
     ("light", [(1, 2), "abc", (float("nan"), 0, 0), (float("inf"), 0, 0)]),
+    ("iso", ["abc", [], [float("nan")], [1] * 9, 3]),
+    ("iso_color", [(2, 0, 0), (1, 2), "abc", (float("nan"), 0, 0)]),
+    ("iso_opacity", [0, 1.5, float("nan"), "abc", None]),
+    ("iso_only", ["yes", 1, None, True]),
     ("camera", [{"fovy": 0}, {"fovy": 180}, {"fovy": 200}, {"fovy": float("nan")}, {"fovy": "abc"},
                 {"eye": (0, 0, 0), "at": (0, 0, 0)}, {"eye": (float("nan"), 0, 0)}, {"at": (float("inf"), 0, 0)},
                 {"up": (0, 0, 1)}, {"up": (0, 0, 0)}, {"up": (float("nan"), 0, 1)}, {"view": "bogus"},
@@ -312,6 +316,27 @@ def test_compositing_and_steps_as_the_command(tmp_path):
     assert (renderer.last_stats["compositing"], renderer.last_stats["steps"]) == ("preintegrated", "local")
     renderer.render(camera=camera, size=(8, 8), mode="reference")
     assert (renderer.last_stats["compositing"], renderer.last_stats["steps"]) == ("point", "global")
+
+
+def test_iso_as_the_command(tmp_path):
+    """iso, iso_color, iso_opacity and iso_only draw what --iso and its options draw; a surface changes the image."""
+    renderer = uvr.Renderer(uvr.load(DISK), field="Temp")
+    camera = {"eye": (40.0, 22.5, 20.08), "at": (0.0, 0.0, 0.08), "up": (0, 0, 1)}
+    plain = renderer.render(camera=camera, size=(64, 64))
+    low, high = renderer.last_stats["range"]
+    value = round(0.5 * (low + high), 2)
+    for extra, keywords in ((["--iso", repr(value)], {"iso": [value]}),
+                            (["--iso", repr(value), "--iso-color", "1,0,0", "--iso-opacity", "0.5", "--iso-only"],
+                             {"iso": [value], "iso_color": (1, 0, 0), "iso_opacity": 0.5, "iso_only": True})):
+        png = tmp_path / "iso.png"
+        result = run_cli("render", DISK, "--field", "Temp", "--eye", "40,22.5,20.08", "--at", "0,0,0.08", "--up",
+                         "0,0,1", "--size", "64x64", "-o", str(png), *extra)
+        assert result.returncode == 0, result.stderr
+        image = renderer.render(camera=camera, size=(64, 64), **keywords)
+        np.testing.assert_array_equal(image[:, :, :3], uvr.read_png(str(png)))
+        assert not np.array_equal(image, plain)
+        assert renderer.last_stats["iso_surfaces"] == 1
+        assert renderer.last_stats["iso_only"] == keywords.get("iso_only", False)
 
 
 def test_shade_as_the_command(tmp_path):

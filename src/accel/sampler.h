@@ -377,6 +377,12 @@ template <class Sampling> struct RaySampler {
     return interpolatePointVectors(volume.mesh, perPoint, at, ray.at(t), t);
   }
 
+  /// The field at `t` into `value`, anywhere along the ray (a point between samples: the sampler moves to
+  /// its cell, and the trail is left as it is); false where no cell holds it.
+  UVR_HOST_DEVICE bool probe(float t, int walkSteps, bool far, float &value) {
+    return locateSample<Sampling>(volume, skipEmpty, clearVoxels, ray, t, walkSteps, far, kNoCell, at, value);
+  }
+
   /// The field at `t`, grid point `k`, into `value`; false where no cell holds the sample. `walkSteps` and
   /// `far` as locateSample takes them.
   UVR_HOST_DEVICE UVR_HOST_INLINE bool sample(float t, float k, int walkSteps, bool far, float &value) {

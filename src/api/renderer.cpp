@@ -218,6 +218,16 @@ void VolumeRenderer::render(const Camera &camera, const FrameSettings &settings,
   shading.diffuse = s.diffuse;
   shading.specular = s.specular;
   shading.shininess = s.shininess;
+  const TransferFunctionView tf = impl_->renderer.transferFunction().view();
+  IsoSettings &iso = internal.iso;
+  iso.count = uint32_t(s.isoValues.size());
+  for (uint32_t i = 0; i < iso.count; ++i) {
+    iso.values[i] = s.isoValues[i];
+    const Vec4f c = tf.sample(s.isoValues[i]);
+    iso.colors[i] = s.isoColor ? *s.isoColor : Vec3f{c.x, c.y, c.z};
+  }
+  iso.opacity = s.isoOpacity;
+  iso.hideVolume = s.isoOnly;
   internal.background = s.background;
   internal.width = s.width;
   internal.height = s.height;
@@ -266,6 +276,8 @@ void VolumeRenderer::render(const Camera &camera, const FrameSettings &settings,
   stats.leafSize = renderer.leafSize();
   stats.shaded = s.shade;
   stats.gradientBytes = renderer.gradientBytes();
+  stats.isoSurfaces = iso.count;
+  stats.isoOnly = s.isoOnly;
   stats.field = impl_->mesh.field(impl_->fieldIndex).name;
   stats.range = {renderer.transferFunction().valueMin(), renderer.transferFunction().valueMax()};
   stats.backend = s.backend;

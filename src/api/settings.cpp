@@ -1,6 +1,7 @@
 #include <uvr/error.h>
 #ifdef UVR_HAVE_CUDA
 #include "backend/cuda/cuda_backend.h"
+#include "render/isosurface.h"
 #endif
 
 #include <uvr/settings.h>
@@ -176,6 +177,21 @@ void validateSettings(const FrameSettings &s) {
       throw Error(std::string(name) + " must be a finite number >= 0; got " + std::to_string(value));
   if (!(s.shininess >= 1.f) || !std::isfinite(s.shininess))
     throw Error("shininess must be a finite number >= 1; got " + std::to_string(s.shininess));
+  if (s.isoValues.size() > kMaxIsoSurfaces)
+    throw Error("at most " + std::to_string(kMaxIsoSurfaces) + " isosurface values; got " +
+                std::to_string(s.isoValues.size()));
+  for (const float value : s.isoValues)
+    if (!std::isfinite(value))
+      throw Error("isosurface values must be finite; got " + std::to_string(value));
+  if (s.isoColor)
+    for (const float c : {s.isoColor->x, s.isoColor->y, s.isoColor->z})
+      if (!(c >= 0.f && c <= 1.f))
+        throw Error("isosurface colour components must be in [0, 1]; got " + std::to_string(s.isoColor->x) +
+                    "," + std::to_string(s.isoColor->y) + "," + std::to_string(s.isoColor->z));
+  if (!(s.isoOpacity > 0.f && s.isoOpacity <= 1.f))
+    throw Error("isosurface opacity must be in (0, 1]; got " + std::to_string(s.isoOpacity));
+  if (s.isoOnly && s.isoValues.empty())
+    throw Error("isoOnly needs isosurface values to draw");
 }
 
 namespace {

@@ -8,6 +8,7 @@
 #include "mesh/mesh_view.h"
 #include "render/camera.h"
 #include "render/integrator.h"
+#include "render/isosurface.h"
 #include "render/pixel.h"
 #include "render/transfer_function.h"
 
@@ -37,8 +38,13 @@ public:
   /// Takes the field's gradient, `count` vectors per point (host memory, which must outlive the backend or
   /// the next call), for shaded frames (IntegratorSettings::shade); null drops it.
   virtual void setGradients(const Vec3f *gradients, uint64_t count) = 0;
+  /// Takes the isosurfaces that frames with IntegratorSettings::iso draw; where the values or hideVolume
+  /// change, recomputes the metadata (partitions holding a surface are marched). Returns the partitions
+  /// skipped, as setTransferFunction does.
+  virtual uint32_t setIsoSurfaces(const IsoSettings &iso) = 0;
   /// Draws a frame of `camera.width` x `camera.height` pixels into `target` (its host buffers) with the
-  /// current transfer function, lit as `shading` says where `settings.shade`; returns the samples taken.
+  /// current transfer function, lit as `shading` says where `settings.shade`, with the isosurfaces of the
+  /// last setIsoSurfaces where `settings.iso`; returns the samples taken.
   /// `kernelMs` is the GPU time of the frame's kernels, without copies; 0 on the CPU.
   virtual SampleTotals render(const CameraView &camera, const IntegratorSettings &settings,
                               const ShadingSettings &shading, const PixelTarget &target,

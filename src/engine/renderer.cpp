@@ -203,8 +203,23 @@ void Renderer::render(const Camera &camera, const RenderSettings &settings, Fram
   derived.gridBounds = gridBounds_;
   derived.finestStepScale = wholeFinestStepScale_;
   const CameraView view = makeCameraView(camera, settings.width, settings.height, settings.rayLimits);
+  if (settings.iso.count > kMaxIsoValues)
+    throw Error("at most " + std::to_string(kMaxIsoValues) + " isosurfaces");
+  if (settings.iso.hideVolume && settings.iso.count == 0)
+    throw Error("hiding the volume needs an isosurface to draw");
+  // Ascending: the march composites a segment's surfaces in the order of their values.
+  IsoSettings iso = settings.iso;
+  for (uint32_t i = 1; i < iso.count; ++i)
+    for (uint32_t j = i; j > 0 && iso.values[j] < iso.values[j - 1]; --j) {
+      std::swap(iso.values[j], iso.values[j - 1]);
+      std::swap(iso.colors[j], iso.colors[j - 1]);
+    }
+  derived.iso = iso.count > 0;
+  if (iso.hideVolume)
+    derived.preintegrate = false; // no volume to integrate
+  transparentPartitions_ = backend(settings.backend).setIsoSurfaces(iso);
   ShadingSettings shading = settings.shading;
-  if (s.shade) {
+  if (s.shade || derived.iso) {
     if (!gradientsBuilt_)
       buildGradients();
     const Vec3f light = settings.shading.light; // in camera space: x right, y up, z towards the eye

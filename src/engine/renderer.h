@@ -32,8 +32,10 @@ struct RenderSettings {
   /// Null, or width x height distances, top row first, where each pixel's ray ends
   /// (FrameSettings::rayLimits).
   const float *rayLimits = nullptr;
-  /// How frames are lit where integrator.shade (the light in camera space).
+  /// How frames are lit where integrator.shade or there are isosurfaces (the light in camera space).
   ShadingSettings shading;
+  /// The isosurfaces to draw (none where count is 0), in any order; integrator.iso is derived from them.
+  IsoSettings iso;
 };
 
 struct Frame {
@@ -122,7 +124,7 @@ public:
   /// Milliseconds the last setTransferFunction took on the backends prepared.
   double tfUpdateMs() const { return tfUpdateMs_; }
   /// Host memory held by the field's gradient per point (computePointGradients), built by the first shaded
-  /// frame and rebuilt by setField; 0 until then.
+  /// frame (or the first with isosurfaces) and rebuilt by setField; 0 until then.
   size_t gradientBytes() const { return gradients_.size() * sizeof(Vec3f); }
 
 private:

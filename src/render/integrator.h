@@ -10,6 +10,7 @@
 #include "mesh/cell.h"
 #include "render/boundary_crossings.h"
 #include "render/intervals.h"
+#include "render/isosurface.h"
 #include "render/scene_view.h"
 #include "render/shading.h"
 
@@ -38,7 +39,10 @@ UVR_HOST_DEVICE inline void compositeBehind(Vec4f &color, const Vec4f &c) {
 /// gives each segment between two samples the function integrated over the values between them. A template
 /// parameter, not a setting: the GPU's kernel for point samples then carries none of pre-integration's state.
 /// Shading (kShade) likewise: it lights each sample's colour, or each segment's by the gradient at its start,
-/// and the unshaded kernels hold none of it.
+/// and the unshaded kernels hold none of it. Isosurfaces (kIso) too: where the field crosses a surface's
+/// value between two points sampled, the crossing is refined (isoCrossing) and the surface, lit by the
+/// gradient there, is composited behind the segment that holds it; these kernels shade the volume as
+/// IntegratorSettings::shade says, so that isosurfaces double no other kernel.
 template <bool kShade> struct ShadeState {}; ///< unshaded, nothing: the GPU's kernels keep their size
 
 /// What a shaded march carries besides the unshaded one's.
@@ -48,7 +52,20 @@ template <> struct ShadeState<true> {
   Vec3f toEye;           ///< along the ray towards the eye
 };
 
-template <class Sampling, bool kPreintegrate, bool kShade = false> struct RayMarch : ShadeState<kShade> {
+template <bool kIso> struct IsoState {}; ///< no surfaces, nothing
+
+/// What a march that draws isosurfaces carries: the last point where the field is known.
+template <> struct IsoState<true> {
+  const IsoSettings *iso;
+  float lastT = 0.f, lastValue = 0.f;
+  RayCell lastCell;              ///< the cell of the last point: a crossing there is closed-form too
+  bool lastValid = false;        ///< whether a cell held the last point, and the field is continuous since
+  float intervalEnd = -INFINITY; ///< where the last interval marched ends
+};
+
+template <class Sampling, bool kPreintegrate, bool kShade = false, bool kIso = false>
+struct RayMarch : ShadeState<kShade || kIso>, IsoState<kIso> {
+  static constexpr bool kLit = kShade || kIso; ///< whether the march holds shading's state
   const SceneView &scene;
   const IntegratorSettings &settings;
   RayIntervals &intervals;
@@ -65,12 +82,23 @@ template <class Sampling, bool kPreintegrate, bool kShade = false> struct RayMar
 
   UVR_HOST_DEVICE RayMarch(const SceneView &scene, const IntegratorSettings &settings,
                            RayIntervals &intervals, RaySampler<Sampling> &sampler, uint32_t &hint,
-                           const ShadingSettings *shading = nullptr)
+                           const ShadingSettings *shading = nullptr, const IsoSettings *iso = nullptr)
       : scene(scene), settings(settings), intervals(intervals), sampler(sampler), hint(hint) {
-    if constexpr (kShade) {
+    if constexpr (kLit) {
       this->shading = shading;
       this->toEye = normalize(Vec3f{} - sampler.ray.direction);
     }
+    if constexpr (kIso)
+      this->iso = iso;
+  }
+
+  /// Whether the volume's samples are lit.
+  UVR_HOST_DEVICE bool shadesVolume() const { return kShade || settings.shade; }
+  /// Whether the volume is drawn at all.
+  UVR_HOST_DEVICE bool drawsVolume() const {
+    if constexpr (kIso)
+      return !this->iso->hideVolume;
+    return true;
   }
 
   /// Samples [ta, tb) every `step`, rounded to whole grid spacings; false once the ray is opaque. Not forced
@@ -110,6 +138,22 @@ template <class Sampling, bool kPreintegrate, bool kShade = false> struct RayMar
     // more samples.
     float kAligned = k, kNext = k;
     bool lastInside = true;
+    if constexpr (kIso) {
+      // Where this interval does not go on from the last one, what lies between is skipped (its range holds
+      // no surface) or outside the mesh: the field there is unknown, and a surface ahead of the first sample
+      // is found from a point just inside the interval: past the intervals' margin, which may reach a little
+      // out of the mesh.
+      if (!(fabsf(ta - this->intervalEnd) <= 0.01f * spacing)) {
+        this->lastValid = false;
+        const float tProbe = ta + 0.02f * spacing;
+        float value;
+        if (tProbe < grid.at(kStart)) {
+          ++samples;
+          const bool inside = sampler.probe(tProbe, walkSteps, far, value);
+          isoAt(color, samples, tProbe, value, inside, walkSteps);
+        }
+      }
+    }
     for (float t = grid.at(k); closing || t < tb; k = kNext, t = grid.at(k)) {
       // Grid points in the gaps between the ray's crossings out of the mesh and back in are passed over; the
       // march goes on from the tet the ray re-enters by.
@@ -119,6 +163,8 @@ template <class Sampling, bool kPreintegrate, bool kShade = false> struct RayMar
         if (entered != kNoCell)
           sampler.enter(entered >> 2);
         if (resume > t) {
+          if constexpr (kIso)
+            this->lastValid = false; // the field is not continuous across the gap
           k = grid.indexAt(resume);
           t = grid.at(k);
           if (!(t < tb))
@@ -138,6 +184,15 @@ template <class Sampling, bool kPreintegrate, bool kShade = false> struct RayMar
           const bool joined = inside && (closing || k == pending.next);
           closeSegment(color, joined ? value : pending.value, spacing);
         }
+      }
+      if constexpr (kIso) {
+        isoAt(color, samples, t, value, inside, walkSteps);
+        if (color.w >= settings.terminationOpacity) {
+          opaque = true;
+          break;
+        }
+      }
+      if constexpr (kPreintegrate) {
         if (closing) {
           closing = false;
           if (color.w >= settings.terminationOpacity) {
@@ -164,14 +219,20 @@ template <class Sampling, bool kPreintegrate, bool kShade = false> struct RayMar
       const bool last = !(grid.at(kNext) < tb);
       if constexpr (kPreintegrate) {
         pending = {value, k, last ? kEnd : kNext, true};
-        if constexpr (kShade)
-          this->pendingGradient = sampler.pointVectorAt(this->shading->gradients, t);
+        if constexpr (kLit) {
+          if (shadesVolume())
+            this->pendingGradient = sampler.pointVectorAt(this->shading->gradients, t);
+        }
       } else {
+        if (!drawsVolume())
+          continue;
         Vec4f c = scene.tf.sample(value);
         if (c.w <= 0.f)
           continue;
-        if constexpr (kShade)
-          c = shade(c, sampler.pointVectorAt(this->shading->gradients, t));
+        if constexpr (kLit) {
+          if (shadesVolume())
+            c = shade(c, sampler.pointVectorAt(this->shading->gradients, t));
+        }
         compositeBehind(color, {c.x, c.y, c.z,
                                 correctedOpacity(c.w, ((last ? kEnd : kNext) - k) * spacing, settings.unit)});
       }
@@ -179,6 +240,25 @@ template <class Sampling, bool kPreintegrate, bool kShade = false> struct RayMar
         opaque = true;
         break;
       }
+    }
+    if constexpr (kIso) {
+      // A surface between the last sample and the interval's end: the next interval may not go on from here.
+      // Just before the end (where the ray's limit may end it); where that lies outside the mesh (the
+      // interval reaches a little past a boundary crossing), past the intervals' margin.
+      float tProbe = tb - 1e-4f * spacing;
+      if (!opaque && this->lastValid && tProbe > this->lastT) {
+        ++samples;
+        float value;
+        bool inside = sampler.probe(tProbe, walkSteps, false, value);
+        if (!inside && tb - 0.02f * spacing > this->lastT) {
+          tProbe = tb - 0.02f * spacing;
+          ++samples;
+          inside = sampler.probe(tProbe, walkSteps, false, value);
+        }
+        isoAt(color, samples, tProbe, value, inside, walkSteps);
+        opaque = color.w >= settings.terminationOpacity;
+      }
+      this->intervalEnd = tb;
     }
     result.color = color;
     result.samples = samples;
@@ -198,11 +278,104 @@ private:
   /// Composites the pending segment, its value running linearly to `endValue` at its end.
   UVR_HOST_DEVICE void closeSegment(Vec4f &color, float endValue, float spacing) {
     pending.valid = false;
+    if (!drawsVolume())
+      return;
     Vec4f c =
         scene.tf.integrate(pending.value, endValue, (pending.next - pending.k) * spacing, settings.unit);
-    if constexpr (kShade)
-      c = shade(c, this->pendingGradient);
+    if constexpr (kLit) {
+      if (shadesVolume())
+        c = shade(c, this->pendingGradient);
+    }
     compositeBehind(color, c);
+  }
+
+  /// Takes the field at `t` (`value`; `inside`: whether a cell holds the point), a point past the last one
+  /// known, and composites the surfaces it crosses on the way from there, nearest first: in the order of
+  /// their values (sorted ascending by the host), upwards where the field rises. The sampler ends in `t`'s
+  /// cell.
+  UVR_HOST_DEVICE void isoAt(Vec4f &color, uint32_t &samples, float t, float value, bool inside,
+                             int walkSteps) {
+    if (!(t > this->lastT) && this->lastValid)
+      return; // behind what is known already (a closing sample past a probe)
+    const bool bracket = this->lastValid && inside;
+    const float t0 = this->lastT, v0 = this->lastValue;
+    this->lastT = t;
+    this->lastValue = value;
+    this->lastValid = inside;
+    const RayCell before = this->lastCell;
+    this->lastCell = sampler.at;
+    if (!bracket)
+      return;
+    const IsoSettings &iso = *this->iso;
+    const bool rising = value > v0;
+    const RayCell atSample = sampler.at;
+    bool moved = false;
+    for (uint32_t j = 0; j < iso.count; ++j) {
+      const uint32_t i = rising ? j : iso.count - 1 - j;
+      if (!crossesValue(v0, value, iso.values[i]))
+        continue;
+      const float hit = isoCrossing(iso.values[i], t0, v0, t, value, before, samples, walkSteps);
+      moved = true;
+      const Vec3f gradient = sampler.pointVectorAt(this->shading->gradients, hit);
+      const Vec3f rgb = shadeSurface(iso.colors[i], gradient, this->toEye, *this->shading);
+      compositeBehind(color, {rgb.x, rgb.y, rgb.z, iso.opacity});
+      if (color.w >= settings.terminationOpacity)
+        break;
+    }
+    if (moved)
+      sampler.at = atSample; // the sample's own cell, for its gradient and the next walk
+  }
+
+  /// Where `cell`, a tet the walk passed on the ray, holds the crossing of `target` in [lo, hi]: the field
+  /// is linear along the ray there, and the root closed-form. A root outside the bracket is another crossing,
+  /// of a field that turns between the samples. `root` is set wherever the tet's field has a slope.
+  UVR_HOST_DEVICE static bool rootInTet(const RayCell &cell, float target, float lo, float hi, float &root) {
+    if (!cell.affine || cell.dvalue == 0.f)
+      return false;
+    root = cell.t + (target - cell.value) / cell.dvalue;
+    const float slack = 1e-4f * (hi - lo); // rounding
+    float w[4], lowest;
+    cell.weightsAt(root, w, lowest);
+    return lowest >= -kInsideTolerance && root >= lo - slack && root <= hi + slack;
+  }
+
+  /// Where the field crosses `target` between `t0` (value `v0`, in cell `cell0`) and `t1` (`v1`), from the
+  /// sampler in `t1`'s cell: in a tet the field is linear along the ray, so the root is closed-form once the
+  /// tet that holds it is found (mostly one of the two); each step locates the best guess so far (that root,
+  /// else regula falsi, every other step a bisection) and keeps the bracket around the crossing. The sampler
+  /// ends in (or next to) its cell.
+  UVR_HOST_DEVICE float isoCrossing(float target, float t0, float v0, float t1, float v1,
+                                    const RayCell &cell0, uint32_t &samples, int walkSteps) {
+    float lo = t0, hi = t1, fLo = v0 - target, fHi = v1 - target;
+    float root;
+    if (rootInTet(cell0, target, lo, hi, root)) {
+      sampler.at = cell0; // for the gradient there
+      return clampf(root, lo, hi);
+    }
+    for (int step = 0; step < kIsoRefineSteps; ++step) {
+      float t = lo - fLo * (hi - lo) / (fHi - fLo);
+      if (rootInTet(sampler.at, target, lo, hi, root))
+        return clampf(root, lo, hi);
+      if (sampler.at.affine && sampler.at.dvalue != 0.f)
+        t = root;
+      if ((step & 1) || !(lo < t && t < hi))
+        t = 0.5f * (lo + hi);
+      ++samples;
+      float value;
+      if (!sampler.probe(t, walkSteps, false, value))
+        break;
+      const float f = value - target;
+      if (f == 0.f)
+        return t;
+      if ((f < 0.f) == (fLo < 0.f)) {
+        lo = t;
+        fLo = f;
+      } else {
+        hi = t;
+        fHi = f;
+      }
+    }
+    return lo - fLo * (hi - lo) / (fHi - fLo);
   }
 
   /// `c` lit where the field's gradient is `gradient`.
@@ -217,12 +390,13 @@ private:
 /// first cell. The skipping modes march only between the ray's first and last boundary crossings, and not
 /// through the gaps between them that lie outside the mesh, where `crossings` knows them. `trail`, where
 /// the policy follows one, holds by grid point the previous ray's guesses at this ray's tets, and takes this
-/// ray's at the next one's. `kShade`: light the samples by the field's gradient as `shading` says.
-template <class Sampling, bool kPreintegrate = false, bool kShade = false>
-UVR_HOST_DEVICE inline RayResult integrateRay(const SceneView &scene, const IntegratorSettings &settings,
-                                              const Ray &ray, uint32_t &hint,
-                                              const BoundaryCrossings &crossings, CellTrail trail = {},
-                                              const ShadingSettings *shading = nullptr) {
+/// ray's at the next one's. `kShade`: light the samples by the field's gradient as `shading` says. `kIso`:
+/// draw the isosurfaces `iso`, and light the samples where settings.shade.
+template <class Sampling, bool kPreintegrate = false, bool kShade = false, bool kIso = false>
+UVR_HOST_DEVICE inline RayResult
+integrateRay(const SceneView &scene, const IntegratorSettings &settings, const Ray &ray, uint32_t &hint,
+             const BoundaryCrossings &crossings, CellTrail trail = {},
+             const ShadingSettings *shading = nullptr, const IsoSettings *iso = nullptr) {
   RayIntervals intervals(scene, settings, ray, crossings);
   if (intervals.none())
     return {};
@@ -235,7 +409,8 @@ UVR_HOST_DEVICE inline RayResult integrateRay(const SceneView &scene, const Inte
   // The next ray's grid starts where it enters the mesh bounds, as this one's does.
   sampler.follow(trail, settings.clip.empty() ? scene.partitions.rootBounds : settings.gridBounds,
                  intervals.grid().spacing);
-  RayMarch<Sampling, kPreintegrate, kShade> march(scene, settings, intervals, sampler, hint, shading);
+  RayMarch<Sampling, kPreintegrate, kShade, kIso> march(scene, settings, intervals, sampler, hint, shading,
+                                                        iso);
   // Here rather than in forEach: with both calls to the march inside it, the GPU's kernel spilled more.
   if (settings.mode == RenderMode::Reference) {
     // The paper's reference ray marcher: the mesh bounds in one interval, at step s1.

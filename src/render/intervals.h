@@ -44,6 +44,9 @@ struct IntegratorSettings {
   /// integrateRay<.., .., true>. Here, not at the end: the GPU's kernels copy these settings to local memory,
   /// and in the padding the unshaded kernels' copy does not grow.
   bool shade = false;
+  /// Draw the backend's isosurfaces (RenderBackend::setIsoSurfaces): the backends pick
+  /// integrateRay<.., .., false, true>, which shades the samples where `shade`. In the padding too.
+  bool iso = false;
   /// Derived from s1, s2 and p by Renderer::render (finestStepSigma): partitions of greater sigma take step
   /// s1 outright, and subtrees of such partitions are marched whole. The default, +inf, computes every
   /// partition's step and, when sampling adaptively, marches every partition alone.

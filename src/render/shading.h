@@ -27,22 +27,33 @@ struct ShadingSettings {
   float fullGradientInverse = 0.f;
 };
 
-/// The colour `rgb` of a sample where the field's gradient is `gradient`, seen along `toEye` (unit, from the
-/// sample towards the eye): Blinn-Phong with a white light, two-sided (the gradient's sign says nothing of
-/// which side a surface faces the eye), blended with `rgb` by the gradient's magnitude.
-UVR_HOST_DEVICE inline Vec3f shadeColor(Vec3f rgb, Vec3f gradient, Vec3f toEye, const ShadingSettings &s) {
-  const float magnitude = length(gradient);
-  const float lit = minf(1.f, magnitude * s.fullGradientInverse);
-  if (!(lit > 0.f)) // also a NaN gradient
-    return rgb;
-  const Vec3f normal = gradient * (1.f / magnitude);
+/// The colour `rgb` lit where the surface's unit normal is `normal`, seen along `toEye` (unit, from the point
+/// towards the eye): Blinn-Phong with a white light, two-sided (the gradient's sign says nothing of which
+/// side a surface faces the eye).
+UVR_HOST_DEVICE inline Vec3f blinnPhong(Vec3f rgb, Vec3f normal, Vec3f toEye, const ShadingSettings &s) {
   const Vec3f light = s.headlight ? toEye : s.light;
   const Vec3f half = s.headlight ? toEye : normalize(light + toEye);
   const float diffuse = fabsf(dot(normal, light));
   const float highlight = s.specular * powf(fabsf(dot(normal, half)), s.shininess);
   const float scale = s.ambient + s.diffuse * diffuse;
-  const Vec3f shaded{rgb.x * scale + highlight, rgb.y * scale + highlight, rgb.z * scale + highlight};
-  return rgb + (shaded - rgb) * lit;
+  return {rgb.x * scale + highlight, rgb.y * scale + highlight, rgb.z * scale + highlight};
+}
+
+/// The colour `rgb` of a sample where the field's gradient is `gradient`, seen along `toEye`: blinnPhong,
+/// blended with `rgb` by the gradient's magnitude.
+UVR_HOST_DEVICE inline Vec3f shadeColor(Vec3f rgb, Vec3f gradient, Vec3f toEye, const ShadingSettings &s) {
+  const float magnitude = length(gradient);
+  const float lit = minf(1.f, magnitude * s.fullGradientInverse);
+  if (!(lit > 0.f)) // also a NaN gradient
+    return rgb;
+  return rgb + (blinnPhong(rgb, gradient * (1.f / magnitude), toEye, s) - rgb) * lit;
+}
+
+/// The colour `rgb` of an isosurface where the field's gradient, its normal, is `gradient`: lit whatever
+/// the gradient's magnitude (a surface is no noise), as if facing the eye where the gradient is 0.
+UVR_HOST_DEVICE inline Vec3f shadeSurface(Vec3f rgb, Vec3f gradient, Vec3f toEye, const ShadingSettings &s) {
+  const float magnitude = length(gradient);
+  return blinnPhong(rgb, magnitude > 0.f ? gradient * (1.f / magnitude) : toEye, toEye, s);
 }
 
 } // namespace uvr

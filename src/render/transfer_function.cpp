@@ -70,15 +70,17 @@ TransferFunctionRangeView TransferFunction::rangeView() const {
           varianceLowest_, varianceHighest_};
 }
 
-PartitionMetadata computePartitionMetadata(const Partitions &partitions, const TransferFunction &tf) {
+PartitionMetadata computePartitionMetadata(const Partitions &partitions, const TransferFunction &tf,
+                                           const IsoSettings *iso) {
   const uint32_t count = partitions.count();
   PartitionMetadata meta;
   meta.maxOpacity.resize(count);
   meta.sigma.resize(count);
   std::vector<float> variance(count);
   const TransferFunctionRangeView ranges = tf.rangeView();
+  const bool hidden = iso && iso->hideVolume;
   tbb::parallel_for(uint32_t(0), count, [&](uint32_t i) {
-    meta.maxOpacity[i] = ranges.maxOpacity(partitions.valueMin[i], partitions.valueMax[i]);
+    meta.maxOpacity[i] = hidden ? 0.f : ranges.maxOpacity(partitions.valueMin[i], partitions.valueMax[i]);
     variance[i] = ranges.colorVariance(partitions.valueMin[i], partitions.valueMax[i]);
   });
 
@@ -88,8 +90,6 @@ PartitionMetadata computePartitionMetadata(const Partitions &partitions, const T
     if (meta.maxOpacity[i] > 0.f) {
       lowest = std::min(lowest, variance[i]);
       highest = std::max(highest, variance[i]);
-    } else {
-      ++meta.transparentCount;
     }
   }
   meta.varianceLowest = lowest;
@@ -98,8 +98,15 @@ PartitionMetadata computePartitionMetadata(const Partitions &partitions, const T
     lowest = ranges.varianceLowest;
     highest = ranges.varianceHighest;
   }
-  for (uint32_t i = 0; i < count; ++i)
+  for (uint32_t i = 0; i < count; ++i) {
     meta.sigma[i] = normalizedSigma(variance[i], lowest, highest);
+    // After the normalisation: the surfaces change which partitions are marched, not the volume's steps.
+    if (iso && !(meta.maxOpacity[i] > 0.f) &&
+        iso->crossesRange(partitions.valueMin[i], partitions.valueMax[i]))
+      meta.maxOpacity[i] = kIsoVisitOpacity;
+    if (!(meta.maxOpacity[i] > 0.f))
+      ++meta.transparentCount;
+  }
 
   meta.nodeMaxOpacity.resize(partitions.nodes.size());
   meta.nodeMinSigma.resize(partitions.nodes.size());

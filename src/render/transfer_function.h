@@ -6,8 +6,9 @@
 #include "core/color_map.h"
 #include "core/host_device.h"
 #include "core/vec.h"
-#include <cmath>
+#include "render/isosurface.h"
 
+#include <cmath>
 #include <vector>
 
 namespace uvr {
@@ -196,8 +197,12 @@ struct PartitionMetadata {
   float varianceLowest = INFINITY, varianceHighest = -INFINITY;
 };
 
-/// On the host, with all cores; the CUDA backend computes the same on the GPU.
-PartitionMetadata computePartitionMetadata(const Partitions &partitions, const TransferFunction &tf);
+/// On the host, with all cores; the CUDA backend computes the same on the GPU. With `iso`, a partition that
+/// the function makes transparent but whose range holds an isosurface is marked kIsoVisitOpacity (marched,
+/// not counted transparent, its steps as a drawn one's), and with iso->hideVolume the function counts as
+/// transparent everywhere.
+PartitionMetadata computePartitionMetadata(const Partitions &partitions, const TransferFunction &tf,
+                                           const IsoSettings *iso = nullptr);
 
 /// A partition's colour deviation normalised by the extremes of the variances over the partitions drawn
 /// (paper §2.1): 1 when they are all alike, so that adaptive sampling then takes the finest step.

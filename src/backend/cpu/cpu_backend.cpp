@@ -23,7 +23,15 @@ CpuBackend::CpuBackend(const Mesh &mesh, const MeshView &view, uint32_t leafSize
 
 uint32_t CpuBackend::setTransferFunction(const TransferFunction &tf) {
   tf_.emplace(tf);
-  metadata_ = computePartitionMetadata(accel_.partitions, *tf_);
+  metadata_ = computePartitionMetadata(accel_.partitions, *tf_, &iso_);
+  return metadata_.transparentCount;
+}
+
+uint32_t CpuBackend::setIsoSurfaces(const IsoSettings &iso) {
+  const bool same = iso_.sameSkipping(iso);
+  iso_ = iso;
+  if (!same && tf_)
+    metadata_ = computePartitionMetadata(accel_.partitions, *tf_, &iso_);
   return metadata_.transparentCount;
 }
 
@@ -35,7 +43,7 @@ uint32_t CpuBackend::setField(const MeshView &view) {
     accel_.tetAffine = buildTetAffine(view);
   if (!tf_)
     return 0;
-  metadata_ = computePartitionMetadata(parts, *tf_);
+  metadata_ = computePartitionMetadata(parts, *tf_, &iso_);
   return metadata_.transparentCount;
 }
 
@@ -54,8 +62,8 @@ SampleTotals CpuBackend::render(const CameraView &camera, const IntegratorSettin
                                 const ShadingSettings &shading, const PixelTarget &target, double &kernelMs) {
   kernelMs = 0.0;
   const SceneView scene = sceneView();
-  if (settings.shade && !gradients_)
-    throw Error("a shaded frame needs the field's gradients");
+  if ((settings.shade || settings.iso) && !gradients_)
+    throw Error("a shaded frame, or one with isosurfaces, needs the field's gradients");
   ShadingSettings lit = shading;
   lit.gradients = gradients_;
   const std::vector<uint32_t> &boundaryFaces = accel_.boundaryFaceList;
@@ -100,7 +108,13 @@ SampleTotals CpuBackend::render(const CameraView &camera, const IntegratorSettin
                           : BoundaryCrossings{};
             // A ray that crosses no boundary face is done at once.
             const RayResult result =
-                along.none()     ? RayResult{}
+                along.none() ? RayResult{}
+                : settings.iso
+                    ? settings.preintegrate
+                          ? integrateRay<HostSampling, true, false, true>(scene, settings, ray, hint, along,
+                                                                          trail, &lit, &iso_)
+                          : integrateRay<HostSampling, false, false, true>(scene, settings, ray, hint, along,
+                                                                           trail, &lit, &iso_)
                 : settings.shade ? settings.preintegrate
                                        ? integrateRay<HostSampling, true, true>(scene, settings, ray, hint,
                                                                                 along, trail, &lit)

@@ -17,6 +17,7 @@ public:
   uint32_t setTransferFunction(const TransferFunction &tf) override;
   uint32_t setField(const MeshView &view) override;
   void setGradients(const Vec3f *gradients, uint64_t) override { gradients_ = gradients; }
+  uint32_t setIsoSurfaces(const IsoSettings &iso) override;
   SampleTotals render(const CameraView &camera, const IntegratorSettings &settings,
                       const ShadingSettings &shading, const PixelTarget &target, double &kernelMs) override;
   uint32_t partitionCount() const override { return accel_.partitions.count(); }
@@ -39,6 +40,7 @@ private:
   MemoryLayout layout_;
   std::optional<TransferFunction> tf_;
   PartitionMetadata metadata_;
+  IsoSettings iso_;
 };
 
 } // namespace uvr

@@ -42,11 +42,11 @@ dim3 renderBlock(RenderMode mode, bool tiles) {
 /// docs/results/log.md.)
 constexpr int kMarchingBlocksPerSm = 5, kSkippingBlocksPerSm = 4;
 
-template <class Sampling, int BlocksPerSm, bool kPreintegrate, bool kShade>
+template <class Sampling, int BlocksPerSm, bool kPreintegrate, bool kShade, bool kIso>
 __global__ void __launch_bounds__(kRenderBlockThreads, BlocksPerSm)
     renderKernel(SceneView scene, IntegratorSettings settings, CameraView camera, PixelTarget target,
                  int height, const uint64_t *crossingStart, const uint64_t *crossingKeys,
-                 SampleTotals *samples, ShadingSettings shading) {
+                 SampleTotals *samples, ShadingSettings shading, IsoSettings iso) {
   const int x = int(blockIdx.x * blockDim.x + threadIdx.x);
   const int y = int(blockIdx.y * blockDim.y + threadIdx.y);
   uint32_t taken = 0; // pixels past the frame's edge take none, and still join the warp's sums below
@@ -56,8 +56,8 @@ __global__ void __launch_bounds__(kRenderBlockThreads, BlocksPerSm)
     if (crossingStart)
       crossings =
           pixelCrossings(crossingStart, crossingKeys, uint64_t(y) * uint64_t(target.width) + uint64_t(x));
-    const RayResult result = integrateRay<Sampling, kPreintegrate, kShade>(scene, settings, camera.ray(x, y),
-                                                                           hint, crossings, {}, &shading);
+    const RayResult result = integrateRay<Sampling, kPreintegrate, kShade, kIso>(
+        scene, settings, camera.ray(x, y), hint, crossings, {}, &shading, &iso);
     target.store(x, y, result);
     taken = result.samples;
   }
@@ -78,13 +78,18 @@ __global__ void __launch_bounds__(kRenderBlockThreads, BlocksPerSm)
 /// The render kernel for `Sampling`, the marching or the skipping modes' block count, the compositing and
 /// the shading.
 template <class Sampling, bool kShade> auto chooseRenderKernel(bool skipping, bool preintegrate) {
-  return preintegrate ? (skipping ? renderKernel<Sampling, kSkippingBlocksPerSm, true, kShade>
-                                  : renderKernel<Sampling, kMarchingBlocksPerSm, true, kShade>)
-                      : (skipping ? renderKernel<Sampling, kSkippingBlocksPerSm, false, kShade>
-                                  : renderKernel<Sampling, kMarchingBlocksPerSm, false, kShade>);
+  return preintegrate ? (skipping ? renderKernel<Sampling, kSkippingBlocksPerSm, true, kShade, false>
+                                  : renderKernel<Sampling, kMarchingBlocksPerSm, true, kShade, false>)
+                      : (skipping ? renderKernel<Sampling, kSkippingBlocksPerSm, false, kShade, false>
+                                  : renderKernel<Sampling, kMarchingBlocksPerSm, false, kShade, false>);
 }
 
-template <class Sampling> auto chooseRenderKernel(bool skipping, bool preintegrate, bool shade) {
+/// Isosurfaces: a kernel per sampling and compositing, at the skipping modes' block count (their rays
+/// carry more), which shades the volume at run time (IntegratorSettings::shade).
+template <class Sampling> auto chooseRenderKernel(bool skipping, bool preintegrate, bool shade, bool iso) {
+  if (iso)
+    return preintegrate ? renderKernel<Sampling, kSkippingBlocksPerSm, true, false, true>
+                        : renderKernel<Sampling, kSkippingBlocksPerSm, false, false, true>;
   return shade ? chooseRenderKernel<Sampling, true>(skipping, preintegrate)
                : chooseRenderKernel<Sampling, false>(skipping, preintegrate);
 }
@@ -129,7 +134,9 @@ struct CudaBackend::Impl {
   DeviceBuffer<Vec3f> points;
   DeviceBuffer<uint32_t> tets, pyramids, wedges, hexes;
   DeviceBuffer<float> values;
-  DeviceBuffer<Vec3f> gradients; // per point, for shaded frames
+  DeviceBuffer<Vec3f> gradients; // per point, for shaded frames and isosurfaces
+  IsoSettings iso;               // the isosurfaces of frames that draw them
+  uint32_t transparent = 0;      // partitions skipped under the last metadata
   uint64_t pointCount = 0;
   DeviceAcceleration accel;
   double buildMs = 0.0;
@@ -268,7 +275,7 @@ uint32_t CudaBackend::setTransferFunction(const TransferFunction &tf) {
   d.skippingFrames = 0;
   d.tiles = false;
 
-  return d.metadata.update(ranges, d.scene.partitions);
+  return d.transparent = d.metadata.update(ranges, d.scene.partitions, d.iso);
 }
 
 uint32_t CudaBackend::setField(const MeshView &view) {
@@ -290,7 +297,18 @@ uint32_t CudaBackend::setField(const MeshView &view) {
   parts.valueMax.upload(valueMax.data(), count);
   d.skippingFrames = 0;
   d.tiles = false;
-  return d.tf ? d.metadata.update(*d.tf, d.scene.partitions) : 0;
+  return d.transparent = d.tf ? d.metadata.update(*d.tf, d.scene.partitions, d.iso) : 0;
+}
+
+uint32_t CudaBackend::setIsoSurfaces(const IsoSettings &iso) {
+  Impl &d = *impl_;
+  const bool same = d.iso.sameSkipping(iso);
+  d.iso = iso;
+  if (!same && d.tf) {
+    UVR_CUDA_CHECK(cudaSetDevice(d.device));
+    d.transparent = d.metadata.update(*d.tf, d.scene.partitions, d.iso);
+  }
+  return d.transparent;
 }
 
 void CudaBackend::setGradients(const Vec3f *gradients, uint64_t count) {
@@ -342,17 +360,18 @@ SampleTotals CudaBackend::render(const CameraView &camera, const IntegratorSetti
   if (crossings)
     d.crossings.find(d.scene.mesh, d.accel.boundaryFaceList, deviceCamera, pixels);
   const uint64_t *crossingStart = crossings ? d.crossings.start() : nullptr;
-  if (settings.shade && d.gradients.size() == 0)
-    throw Error("a shaded frame needs the field's gradients");
+  if ((settings.shade || settings.iso) && d.gradients.size() == 0)
+    throw Error("a shaded frame, or one with isosurfaces, needs the field's gradients");
   ShadingSettings lit = shading;
   lit.gradients = d.gradients.data();
   const auto kernel =
       d.accel.cellNeighbors.size() > 0
-          ? chooseRenderKernel<DeviceCellWalkSampling>(skipping, settings.preintegrate, settings.shade)
-          : chooseRenderKernel<DeviceSampling>(skipping, settings.preintegrate, settings.shade);
+          ? chooseRenderKernel<DeviceCellWalkSampling>(skipping, settings.preintegrate, settings.shade,
+                                                       settings.iso)
+          : chooseRenderKernel<DeviceSampling>(skipping, settings.preintegrate, settings.shade, settings.iso);
   UVR_CUDA_CHECK(cudaEventRecord(d.renderStart));
   kernel<<<grid, block>>>(d.scene, settings, deviceCamera, device, height, crossingStart, d.crossings.keys(),
-                          d.sampleTotals.data(), lit);
+                          d.sampleTotals.data(), lit, d.iso);
   UVR_CUDA_CHECK(cudaGetLastError());
   UVR_CUDA_CHECK(cudaEventRecord(d.kernelEnd));
   // The frame comes back through pinned memory, piece by piece, each copied on all cores into the caller's

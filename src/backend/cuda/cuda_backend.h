@@ -45,6 +45,8 @@ public:
   uint32_t setField(const MeshView &view) override;
   /// Uploads the field's gradient per point, for shaded frames.
   void setGradients(const Vec3f *gradients, uint64_t count) override;
+  /// Takes the isosurfaces and recomputes the metadata on the GPU where the partitions marched change.
+  uint32_t setIsoSurfaces(const IsoSettings &iso) override;
   /// Copies the metadata of the last setTransferFunction back, for checks against the host's.
   PartitionMetadata metadata() const override;
   /// Copies the acceleration data the GPU built back, for checks against the host's builds.

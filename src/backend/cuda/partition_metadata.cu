@@ -27,25 +27,30 @@ __global__ void linkNodesKernel(const KdNode *nodes, uint32_t nodeCount, uint32_
 }
 
 /// Per partition, as computePartitionMetadata on the host: the maximum opacity (at its leaf node, and raised
-/// into the nodes above, zeroed beforehand) and the colour variance (into `variance`, normalised by
-/// normalizeSigmaKernel).
+/// into the nodes above, zeroed beforehand; kIsoVisitOpacity for a transparent one that holds a surface) and
+/// the colour variance (into `variance`, normalised by normalizeSigmaKernel).
 __global__ void partitionMetadataKernel(TransferFunctionRangeView tf, PartitionsView parts,
                                         const uint32_t *parents, const uint32_t *partitionNodes,
-                                        float *variance, float *nodeMaxOpacity, MetadataTotals *totals) {
+                                        float *variance, float *nodeMaxOpacity, MetadataTotals *totals,
+                                        IsoSettings iso) {
   const uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
-  bool drawn = false;
+  bool drawn = false, marched = false;
   float v = 0.f;
   if (i < parts.count) {
-    const float opacity = maxf(tf.maxOpacity(parts.valueMin[i], parts.valueMax[i]), 0.f);
+    const float opacity =
+        iso.hideVolume ? 0.f : maxf(tf.maxOpacity(parts.valueMin[i], parts.valueMax[i]), 0.f);
     v = tf.colorVariance(parts.valueMin[i], parts.valueMax[i]);
     variance[i] = v;
     drawn = opacity > 0.f;
+    const float visit =
+        drawn || !iso.crossesRange(parts.valueMin[i], parts.valueMax[i]) ? opacity : kIsoVisitOpacity;
+    marched = visit > 0.f;
     // Raise the nodes above to this maximum; stop at one that holds as much already: whoever raised it
     // carries that value on to the root.
     uint32_t node = partitionNodes[i];
-    nodeMaxOpacity[node] = opacity;
-    const uint32_t bits = __float_as_uint(opacity);
-    while (drawn && node != 0) {
+    nodeMaxOpacity[node] = visit;
+    const uint32_t bits = __float_as_uint(visit);
+    while (marched && node != 0) {
       node = parents[node];
       if (atomicMax(reinterpret_cast<uint32_t *>(nodeMaxOpacity + node), bits) >= bits)
         break;
@@ -60,7 +65,7 @@ __global__ void partitionMetadataKernel(TransferFunctionRangeView tf, Partitions
   const uint32_t highest =
       Reduce(storage).Reduce(drawn ? varianceBits : 0u, [](uint32_t a, uint32_t b) { return a > b ? a : b; });
   __syncthreads();
-  const uint32_t transparent = Reduce(storage).Sum(i < parts.count && !drawn ? 1u : 0u);
+  const uint32_t transparent = Reduce(storage).Sum(i < parts.count && !marched ? 1u : 0u);
   if (threadIdx.x == 0) {
     atomicMin(&totals->lowestVariance, lowest);
     atomicMax(&totals->highestVariance, highest);
@@ -111,13 +116,14 @@ void DeviceMetadata::link(SceneView &scene, uint32_t nodeCount) {
   scene.nodeMinSigma = nodeMinSigma.data();
 }
 
-uint32_t DeviceMetadata::update(const TransferFunctionRangeView &tf, const PartitionsView &partitions) {
+uint32_t DeviceMetadata::update(const TransferFunctionRangeView &tf, const PartitionsView &partitions,
+                                const IsoSettings &iso) {
   const uint32_t count = partitions.count;
   UVR_CUDA_CHECK(cudaMemset(nodeMaxOpacity.data(), 0, nodeMaxOpacity.bytes()));
   UVR_CUDA_CHECK(cudaMemcpy(totals.data(), &kEmptyTotals, sizeof kEmptyTotals, cudaMemcpyHostToDevice));
   partitionMetadataKernel<<<blocksFor(count, kMetadataBlock), kMetadataBlock>>>(
       tf, partitions, kdParents.data(), partitionNodes.data(), sigma.data(), nodeMaxOpacity.data(),
-      totals.data());
+      totals.data(), iso);
   UVR_CUDA_CHECK(cudaGetLastError());
   UVR_CUDA_CHECK(cudaMemset(nodeMinSigma.data(), 0x7f, nodeMinSigma.bytes())); // 3.4e38, above any sigma
   normalizeSigmaKernel<<<blocksFor(count, kMetadataBlock), kMetadataBlock>>>(

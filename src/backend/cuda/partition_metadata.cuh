@@ -15,7 +15,7 @@ namespace uvr {
 struct MetadataTotals {
   uint32_t lowestVariance;  ///< bits of the smallest variance over the partitions drawn
   uint32_t highestVariance; ///< bits of the largest
-  uint32_t transparent;     ///< partitions the transfer function makes fully transparent
+  uint32_t transparent;     ///< partitions the transfer function makes fully transparent, with no surface
 };
 
 class DeviceMetadata {
@@ -23,9 +23,10 @@ public:
   /// Sizes the arrays for `scene`'s partitions and KD tree (`nodeCount` nodes), links each node to its
   /// parent and each partition to its leaf, and points `scene` at the arrays.
   void link(SceneView &scene, uint32_t nodeCount);
-  /// Recomputes the metadata for the transfer function `tf`; returns the number of fully transparent
-  /// partitions.
-  uint32_t update(const TransferFunctionRangeView &tf, const PartitionsView &partitions);
+  /// Recomputes the metadata for the transfer function `tf` and the isosurfaces `iso` (as
+  /// computePartitionMetadata); returns the number of partitions skipped: fully transparent, no surface.
+  uint32_t update(const TransferFunctionRangeView &tf, const PartitionsView &partitions,
+                  const IsoSettings &iso);
   /// Copies the metadata of the last update back, for the `count` partitions.
   PartitionMetadata download(uint32_t count) const;
   size_t bytes() const;
