@@ -75,6 +75,7 @@ enum class MemoryLayout : uint8_t {
 const char *memoryLayoutName(MemoryLayout layout);
 /// Parses auto|default|lean; throws uvr::Error otherwise.
 MemoryLayout parseMemoryLayout(const std::string &name);
+
 /// The most isosurfaces a frame draws (FrameSettings::isoValues).
 constexpr uint32_t kMaxIsoSurfaces = 8;
 
