@@ -8,46 +8,48 @@ the acceleration data (VolumeRenderer::setField), against a full load and build 
   bench/movie_steps.py UVR --brain-series MESH.vtu DIR [--count N] ...
 
 --brain-series first writes DIR/brain_K.vtu (K < N, default 4; point field T1 times a wave that moves with K,
-the grid unchanged) and DIR/brain.pvd from MESH with VTK's Python module (Debian: python3-vtk9), then times
-that series.
+the grid unchanged; uncompressed appended .vtu) and DIR/brain.pvd from MESH, with `uvr convert` and numpy, then
+times that series.
 """
 import argparse
 import json
 import os
+import re
 import statistics
 import subprocess
 import sys
 import tempfile
 
 
-def brain_series(mesh, folder, count):
-    import vtk
-    from vtk.util import numpy_support
+def appended_array(data, header, name, dtype, components=1):
+    """The raw appended array `name` of a .vtu as uvr convert writes it (UInt64 byte count, then the values)."""
     import numpy as np
-    reader = vtk.vtkXMLUnstructuredGridReader()
-    reader.SetFileName(mesh)
-    reader.Update()
-    grid = reader.GetOutput()
-    points = numpy_support.vtk_to_numpy(grid.GetPoints().GetData()).astype(np.float64)
-    t1 = numpy_support.vtk_to_numpy(grid.GetPointData().GetArray("T1")).astype(np.float64)
+    match = re.search(rf'Name="{name}"[^>]*offset="(\d+)"', header)
+    start = data.index(b'<AppendedData encoding="raw">') + len(b'<AppendedData encoding="raw">')
+    start = data.index(b"_", start) + 1 + int(match.group(1))
+    size = int(np.frombuffer(data, np.uint64, 1, start)[0])
+    return start + 8, np.frombuffer(data, dtype, size // np.dtype(dtype).itemsize, start + 8).reshape(-1, components)
+
+
+def brain_series(uvr, mesh, folder, count):
+    import numpy as np
     os.makedirs(folder, exist_ok=True)
+    base = os.path.join(folder, "brain_base.vtu")
+    subprocess.run([uvr, "convert", mesh, base, "--field", "T1"], check=True, stdout=subprocess.DEVNULL)
+    with open(base, "rb") as f:
+        data = bytearray(f.read())
+    header = data[:data.index(b"<AppendedData")].decode()
+    _, points = appended_array(data, header, "Points", np.float32, 3)
+    t1_at, t1 = appended_array(data, header, "T1", np.float32)
+    t1 = t1[:, 0].astype(np.float64)
     rows = []
     for k in range(count):
-        wave = 0.5 + 0.5 * np.sin(points[:, 0] / 15.0 + k * np.pi / count)
-        step = vtk.vtkUnstructuredGrid()
-        step.SetPoints(grid.GetPoints())
-        step.SetCells(grid.GetCellTypesArray(), grid.GetCells())
-        array = numpy_support.numpy_to_vtk((t1 * wave).astype(np.float32), deep=True)
-        array.SetName("T1")
-        step.GetPointData().AddArray(array)
-        writer = vtk.vtkXMLUnstructuredGridWriter()
-        writer.SetFileName(os.path.join(folder, f"brain_{k}.vtu"))
-        writer.SetInputData(step)
-        writer.SetDataModeToAppended()
-        writer.EncodeAppendedDataOff()
-        writer.SetCompressorTypeToNone()
-        writer.Write()
+        wave = 0.5 + 0.5 * np.sin(points[:, 0].astype(np.float64) / 15.0 + k * np.pi / count)
+        data[t1_at:t1_at + 4 * len(t1)] = (t1 * wave).astype("<f4").tobytes()
+        with open(os.path.join(folder, f"brain_{k}.vtu"), "wb") as f:
+            f.write(data)
         rows.append(f'<DataSet timestep="{k}" file="brain_{k}.vtu"/>')
+    os.remove(base)
     pvd = os.path.join(folder, "brain.pvd")
     with open(pvd, "w") as f:
         f.write('<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1"><Collection>\n' +
@@ -77,7 +79,7 @@ def main():
     parser.add_argument("--backend", default="cpu")
     parser.add_argument("--runs", type=int, default=3)
     a = parser.parse_args()
-    series = brain_series(*a.brain_series, a.count) if a.brain_series else a.series
+    series = brain_series(a.uvr, *a.brain_series, a.count) if a.brain_series else a.series
     if not series:
         sys.exit("movie_steps: give SERIES.pvd or --brain-series MESH DIR")
     common = [series, "--size", a.size, "--backend", a.backend] + (["--field", a.field] if a.field else [])
