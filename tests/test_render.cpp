@@ -1,11 +1,13 @@
 // Whole-frame properties of the integrator: analytic transmittance, equivalence of the modes, no cracks at
 // partition boundaries, independence of cell winding.
+#include "api/access.h"
 #include "engine/renderer.h"
 #include "mesh/mesh_stats.h"
 #include "mesh/procedural_mesh.h"
 #include "mesh/tet_neighbors.h"
 #include "render/boundary_crossings.h"
 #include <uvr/error.h>
+#include <uvr/renderer.h>
 
 #include <gtest/gtest.h>
 
@@ -760,6 +762,41 @@ TEST(Partitions, StepScalesAreTheCellSizeRatioAsAPowerOfTwo) {
   EXPECT_EQ(scales.node[1], 1.f); // over leaves 0, 1 and 2
   EXPECT_EQ(scales.node[4], 0.5f);
   EXPECT_EQ(scales.node[2], 2.f);
+}
+
+// The pieces of a mesh split among processes: their shares of the step scales, each from its region's
+// partitions over the cells that touch the region (as each rank holds them), give the whole mesh's
+// reference exactly, on a graded mesh whose scales differ.
+TEST(Partitions, PiecesStepScaleSharesMakeTheWholeMeshsReference) {
+  Mesh graded = buildMesh(makeBoxGrid(CellType::Tetra, 16, kBox, [](Vec3f p) { return p.y; }), "graded");
+  for (Vec3f &p : graded.points) // cells shrink towards x = -1, by a factor of 64 across the box
+    p.x = -1.f + 2.f * (std::pow(64.f, 0.5f * (p.x + 1.f)) - 1.f) / 63.f;
+  const auto piece = [&](const Box3f &region) {
+    Mesh cells = graded;
+    cells.tets.clear();
+    for (size_t t = 0; t < graded.tets.size(); t += 4) {
+      Box3f box;
+      for (size_t k = 0; k < 4; ++k)
+        box.extend(graded.points[graded.tets[t + k]]);
+      if (!intersection(box, region).empty())
+        cells.tets.insert(cells.tets.end(), graded.tets.begin() + ptrdiff_t(t),
+                          graded.tets.begin() + ptrdiff_t(t + 4));
+    }
+    return detail::Access::make(std::move(cells), "piece");
+  };
+  const VolumeMesh mesh = detail::Access::make(Mesh(graded), "graded");
+  for (uint32_t leafSize : {16u, 64u}) {
+    const VolumeMesh::StepScaleReference whole = mesh.stepScaleReference(leafSize);
+    EXPECT_LT(whole.finestStepScale, 1.f);
+    for (int ranks : {2, 4}) {
+      std::vector<VolumeMesh::StepScaleShare> shares;
+      for (const Box3f &region : splitIntoRegions(mesh, ranks).regions)
+        shares.push_back(piece(region).stepScaleShare(region, mesh.bounds(), leafSize));
+      const VolumeMesh::StepScaleReference combined = VolumeMesh::stepScaleReference(shares);
+      EXPECT_EQ(combined.meanCellSizeLog2, whole.meanCellSizeLog2) << ranks << " ranks, leaf " << leafSize;
+      EXPECT_EQ(combined.finestStepScale, whole.finestStepScale) << ranks << " ranks, leaf " << leafSize;
+    }
+  }
 }
 
 // On a graded mesh, steps that follow the mesh take fewer samples where cells are large and more where they

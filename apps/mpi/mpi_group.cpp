@@ -76,6 +76,21 @@ std::vector<uint32_t> MpiGroup::sum(const std::vector<uint32_t> &values) {
   return total;
 }
 
+std::vector<int64_t> MpiGroup::allGather(const std::vector<int64_t> &values) {
+  std::vector<int> counts(static_cast<size_t>(size_)), offsets(static_cast<size_t>(size_));
+  const int count = int(values.size());
+  MPI_Allgather(&count, 1, MPI_INT, counts.data(), 1, MPI_INT, MPI_COMM_WORLD);
+  int total = 0;
+  for (int r = 0; r < size_; ++r) {
+    offsets[size_t(r)] = total;
+    total += counts[size_t(r)];
+  }
+  std::vector<int64_t> all(static_cast<size_t>(total));
+  MPI_Allgatherv(values.data(), count, MPI_INT64_T, all.data(), counts.data(), offsets.data(), MPI_INT64_T,
+                 MPI_COMM_WORLD);
+  return all;
+}
+
 namespace {
 
 /// Pixels [x0, x1) of rows [y0, y1).

@@ -196,6 +196,24 @@ std::optional<PartitionedFile> piecesForRanks(const RenderOptions &o, int ranks,
   return std::nullopt;
 }
 
+/// Every rank's share of the whole mesh's step scales, on every rank.
+std::vector<VolumeMesh::StepScaleShare> gatherShares(MpiGroup &group,
+                                                     const VolumeMesh::StepScaleShare &mine) {
+  std::vector<int64_t> packed(mine.sizeLog2Sums);
+  packed.insert(packed.end(), mine.cellCounts.begin(), mine.cellCounts.end());
+  const std::vector<int64_t> all = group.allGather(packed);
+  const std::vector<int64_t> lengths = group.allGather({int64_t(mine.cellCounts.size())});
+  std::vector<VolumeMesh::StepScaleShare> shares(lengths.size());
+  auto at = all.begin();
+  for (size_t r = 0; r < shares.size(); ++r) {
+    const ptrdiff_t n = ptrdiff_t(lengths[r]);
+    shares[r].sizeLog2Sums.assign(at, at + n);
+    shares[r].cellCounts.assign(at + n, at + 2 * n);
+    at += 2 * n;
+  }
+  return shares;
+}
+
 /// This rank's share of a partitioned file: its consecutive pieces with their ghost cells, field
 /// `fieldIndex` alone (chosen by --field), as one mesh.
 VolumeMesh readShare(const RenderOptions &o, const PartitionedFile &file, int rank, int ranks,
@@ -294,6 +312,7 @@ void runRenderParallel(const RenderCommandOptions &o) {
   } else {
     std::optional<LoadedMesh> loaded;
     group.step([&] { loaded.emplace(loadForRendering(o.view)); });
+    VolumeMesh::StepScaleShare share;
     group.step([&] {
       const Timer pieceTimer; // the load ends with this rank's piece, as a share's does
       const VolumeMesh &mesh = loaded->mesh;
@@ -306,13 +325,17 @@ void runRenderParallel(const RenderCommandOptions &o) {
       whole.leafSize = mesh.defaultLeafSize();
       whole.fieldRange = mesh.fieldRange(loaded->fieldIndex);
       whole.fieldName = mesh.field(loaded->fieldIndex).name;
-      whole.stepScales = mesh.stepScaleReference(o.view.leafSize);
       whole.regions = splitIntoRegions(mesh, group.size());
-      part.emplace(meshPiece(mesh, loaded->fieldIndex, whole.regions.regions[size_t(group.rank())]));
+      const Box3f &region = whole.regions.regions[size_t(group.rank())];
+      part.emplace(meshPiece(mesh, loaded->fieldIndex, region));
+      // Each rank's partitions within its region, not the whole mesh's on every rank.
+      share = part->stepScaleShare(region, whole.bounds,
+                                   o.view.leafSize != kAutoLeafSize ? o.view.leafSize : whole.leafSize);
       fileLoadMs = loaded->loadMs;
       loadMs = loaded->loadMs + pieceTimer.milliseconds();
       loaded.reset(); // the piece is all this rank keeps
     });
+    whole.stepScales = VolumeMesh::stepScaleReference(gatherShares(group, share));
   }
 
   loadPeakBytes = peakResidentBytes();

@@ -152,6 +152,17 @@ public:
     float finestStepScale = 1.f;
   };
   StepScaleReference stepScaleReference(uint32_t leafSize = kAutoLeafSize) const;
+  /// A piece's part of its whole mesh's StepScaleReference, for the pieces of a mesh split among processes:
+  /// per partition a renderer makes of this piece in `region` (one of splitIntoRegions' for the whole mesh,
+  /// whose bounds are `wholeBounds`) with `leafSize`, the sum of its cells' sizes and their count. The
+  /// pieces' shares together give the whole mesh's reference (stepScaleReference(shares)) at the cost of
+  /// each piece's partitions, not the whole mesh's.
+  struct StepScaleShare {
+    std::vector<int64_t> sizeLog2Sums;
+    std::vector<uint64_t> cellCounts;
+  };
+  StepScaleShare stepScaleShare(const Box3f &region, const Box3f &wholeBounds, uint32_t leafSize) const;
+  static StepScaleReference stepScaleReference(const std::vector<StepScaleShare> &shares);
   /// The most cells per partition that kAutoLeafSize stands for.
   uint32_t defaultLeafSize() const;
   /// The partitions a renderer makes of this mesh with `leafSize` (kAutoLeafSize: the default); builds them.

@@ -72,9 +72,10 @@ template <typename Storage> struct PartitionArrays {
 };
 using Partitions = PartitionArrays<HostStorage>;
 
-/// Median-split KD-tree over cell centroids until a leaf holds at most `leafSize` cells. `stepScaleMean`,
-/// where given, takes the mean cellSizeLog2 the step scales compare with (StepScales::mean).
-Partitions buildPartitions(const MeshView &mesh, uint32_t leafSize, double *stepScaleMean = nullptr);
+/// Median-split KD-tree over cell centroids until a leaf holds at most `leafSize` cells. `sizeLog2Sums`,
+/// where given, takes the sum of cellSizeLog2 over each partition's cells (what its step scale comes from).
+Partitions buildPartitions(const MeshView &mesh, uint32_t leafSize,
+                           std::vector<int64_t> *sizeLog2Sums = nullptr);
 
 /// The top levels of the tree buildPartitions makes of `mesh`, down to `count` regions (for a power of 2, the
 /// same median splits; otherwise split in proportion to the regions on each side), for the pieces of a mesh

@@ -314,7 +314,7 @@ RegionSplit splitRegions(const MeshView &mesh, int count) {
   return split;
 }
 
-Partitions buildPartitions(const MeshView &mesh, uint32_t leafSize, double *stepScaleMean) {
+Partitions buildPartitions(const MeshView &mesh, uint32_t leafSize, std::vector<int64_t> *sizeLog2Sums) {
   const uint64_t cellCount = mesh.cellCount();
   if (cellCount == 0)
     throw Error("the mesh has no volume cells");
@@ -374,7 +374,7 @@ Partitions buildPartitions(const MeshView &mesh, uint32_t leafSize, double *step
   parts.valueMin.resize(leafCount);
   parts.valueMax.resize(leafCount);
   parts.cellCounts.resize(leafCount);
-  std::vector<int64_t> sizeLog2Sums(leafCount);
+  std::vector<int64_t> leafSizeLog2Sums(leafCount);
   tbb::parallel_for(uint32_t(0), leafCount, [&](uint32_t i) {
     LeafAccumulator leaf;
     for (const std::vector<LeafAccumulator> &local : perThread)
@@ -385,14 +385,15 @@ Partitions buildPartitions(const MeshView &mesh, uint32_t leafSize, double *step
     parts.valueMin[i] = leaf.valueMin;
     parts.valueMax[i] = leaf.valueMax;
     parts.cellCounts[i] = leaf.count;
-    sizeLog2Sums[i] = leaf.sizeLog2Sum;
+    leafSizeLog2Sums[i] = leaf.sizeLog2Sum;
   });
-  StepScales scales = computeStepScales(sizeLog2Sums, parts.cellCounts, parts.nodes, mesh.stepScaleReference);
+  StepScales scales =
+      computeStepScales(leafSizeLog2Sums, parts.cellCounts, parts.nodes, mesh.stepScaleReference);
   parts.stepScale = std::move(scales.partition);
   parts.nodeMaxStepScale = std::move(scales.node);
   parts.finestStepScale = scales.finest;
-  if (stepScaleMean)
-    *stepScaleMean = scales.mean;
+  if (sizeLog2Sums)
+    *sizeLog2Sums = std::move(leafSizeLog2Sums);
   // Children follow their parents in `nodes`, so one backward pass gathers each subtree's box.
   parts.nodeBounds.assign(parts.nodes.size(), Box3f{});
   for (size_t node = parts.nodes.size(); node-- > 0;) {

@@ -248,10 +248,33 @@ VolumeMesh::StepScaleReference VolumeMesh::stepScaleReference(uint32_t leafSize)
   if (cellCount() == 0)
     return {};
   const uint32_t size = leafSize != kAutoLeafSize ? leafSize : defaultLeafSize();
-  StepScaleReference reference;
-  reference.finestStepScale =
-      buildPartitions(makeMeshView(impl_->mesh, -1), size, &reference.meanCellSizeLog2).finestStepScale;
-  return reference;
+  StepScaleShare whole;
+  whole.cellCounts = buildPartitions(makeMeshView(impl_->mesh, -1), size, &whole.sizeLog2Sums).cellCounts;
+  return stepScaleReference({whole});
+}
+
+VolumeMesh::StepScaleShare VolumeMesh::stepScaleShare(const Box3f &region, const Box3f &wholeBounds,
+                                                      uint32_t leafSize) const {
+  if (cellCount() == 0)
+    return {};
+  MeshView view = makeMeshView(impl_->mesh, -1);
+  view.pieceRegion = region;
+  view.pieceWholeBounds = wholeBounds;
+  StepScaleShare share;
+  share.cellCounts = buildPartitions(view, leafSize, &share.sizeLog2Sums).cellCounts;
+  return share;
+}
+
+VolumeMesh::StepScaleReference VolumeMesh::stepScaleReference(const std::vector<StepScaleShare> &shares) {
+  StepScaleShare all;
+  for (const StepScaleShare &share : shares) {
+    all.sizeLog2Sums.insert(all.sizeLog2Sums.end(), share.sizeLog2Sums.begin(), share.sizeLog2Sums.end());
+    all.cellCounts.insert(all.cellCounts.end(), share.cellCounts.begin(), share.cellCounts.end());
+  }
+  if (all.cellCounts.empty())
+    return {};
+  const StepScales scales = computeStepScales(all.sizeLog2Sums, all.cellCounts, {});
+  return {scales.mean, scales.finest};
 }
 
 uint32_t VolumeMesh::defaultLeafSize() const { return uvr::defaultLeafSize(cellCount()); }
