@@ -244,8 +244,14 @@ CudaBackend::CudaBackend(const Mesh &hostMesh, const MeshView &mesh, uint32_t le
   UVR_CUDA_CHECK(cudaMemGetInfo(&freeBytes, &totalBytes));
   if (!d.lean && otherCells > 0 && cellAdjacencyBytes(otherCells) <= freeBytes / 8) {
     const Timer adjacency;
-    copyMember(d.accel.cellNeighbors, buildCellNeighbors(hostMesh));
+    const std::vector<uint32_t> cellNeighbors = buildCellNeighbors(hostMesh);
+    copyMember(d.accel.cellNeighbors, cellNeighbors);
     copyMember(d.accel.cellFacePlanes, buildCellFacePlanes(mesh));
+    // The boundary faces of the tets and the other cells, for the frames' crossings.
+    std::vector<uint32_t> tetNeighbors;
+    copyMember(tetNeighbors, d.accel.tetNeighbors);
+    copyMember(d.accel.boundaryFaceList,
+               listBoundaryCellFaces(mesh, dataOrNull(tetNeighbors), cellNeighbors));
     d.buildSteps.emplace_back("cell adjacency (host)", adjacency.milliseconds());
   }
   d.buildMs = timer.milliseconds();
