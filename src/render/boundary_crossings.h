@@ -77,6 +77,10 @@ struct CrossingCursor {
   uint32_t next = 0;
   float nextT = -INFINITY; ///< t of crossing `next`, INFINITY past the last; -INFINITY before the first look
   bool inGap = false;      ///< whether crossing next - 1 leaves the mesh and crossing `next` enters it again
+  /// Crossings into the mesh less those out of it, before `next` (those repeated at an edge once): a gap
+  /// needs it at 0. Faces that no cell across was found for (pieces whose points were not joined) come in
+  /// pairs, one in and one out, in either order where the two round differently, and are no gap.
+  int depth = 0;
 };
 
 /// Where the ray leaves the gap in the mesh that holds t, if it lies in one: the crossing after the last one
@@ -90,13 +94,20 @@ UVR_HOST_DEVICE inline float afterGap(const BoundaryCrossings &crossings, float 
   if (t < cursor.nextT && !cursor.inGap)
     return t;
   uint32_t next = cursor.next;
-  for (; next < crossings.count && crossingT(crossings.keys[next]) <= t; ++next)
-    entered = crossingExits(crossings.keys[next]) ? kNoCell : crossingFace(crossings.keys[next]);
+  for (; next < crossings.count && crossingT(crossings.keys[next]) <= t; ++next) {
+    const uint64_t key = crossings.keys[next];
+    const bool exits = crossingExits(key);
+    // A ray through an edge or a corner crosses each face there, the same way: once.
+    const bool repeated = next > 0 && crossingExits(crossings.keys[next - 1]) == exits &&
+                          crossingT(key) - crossingT(crossings.keys[next - 1]) <= margin;
+    cursor.depth += repeated ? 0 : exits ? -1 : 1;
+    entered = exits ? kNoCell : crossingFace(key);
+  }
   cursor.next = next;
   cursor.nextT = next < crossings.count ? crossingT(crossings.keys[next]) : INFINITY;
   // Before the first crossing or after the last, the march's interval leaves the ray out.
   cursor.inGap = next > 0 && next < crossings.count && crossingExits(crossings.keys[next - 1]) &&
-                 !crossingExits(crossings.keys[next]);
+                 !crossingExits(crossings.keys[next]) && cursor.depth <= 0;
   if (!cursor.inGap)
     return t;
   const float before = crossingT(crossings.keys[next - 1]);
