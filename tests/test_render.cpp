@@ -2,6 +2,7 @@
 // partition boundaries, independence of cell winding.
 #include "api/access.h"
 #include "engine/renderer.h"
+#include "mesh/cell_neighbors.h"
 #include "mesh/mesh_stats.h"
 #include "mesh/procedural_mesh.h"
 #include "mesh/tet_neighbors.h"
@@ -57,14 +58,73 @@ template <typename Keep> void keepTets(Mesh &mesh, Keep &&keep) {
   mesh.tets = std::move(kept);
 }
 
+/// The cells of `grid` whose centre (the mean of their corners) `keep` takes, with the point field alone: the
+/// cell field's values would no longer match the cells.
+template <typename Keep> UnstructuredGrid keepCells(const UnstructuredGrid &grid, Keep &&keep) {
+  UnstructuredGrid kept = grid;
+  kept.offsets = {0};
+  kept.connectivity.clear();
+  kept.types.clear();
+  for (size_t c = 0; c + 1 < grid.offsets.size(); ++c) {
+    Vec3f centre{0.f, 0.f, 0.f};
+    const int64_t first = grid.offsets[c], last = grid.offsets[c + 1];
+    for (int64_t i = first; i < last; ++i)
+      centre = centre + grid.points[size_t(grid.connectivity[size_t(i)])] * (1.f / float(last - first));
+    if (!keep(centre))
+      continue;
+    kept.connectivity.insert(kept.connectivity.end(), grid.connectivity.begin() + first,
+                             grid.connectivity.begin() + last);
+    kept.offsets.push_back(int64_t(kept.connectivity.size()));
+    kept.types.push_back(grid.types[c]);
+  }
+  kept.fields.resize(1);
+  return kept;
+}
+
+/// Whether a cell centre lies in the notched shell: a boundary with concave parts and a cavity.
+bool inNotchedShell(Vec3f centre) {
+  const float r = length(centre);
+  return r > 0.45f && r < 0.95f && !(centre.x > 0.2f && centre.y > 0.2f);
+}
+
 /// A jittered lattice of tets cut to a shell with a notch: a boundary with concave parts and a cavity.
 Mesh notchedShell() {
   Mesh mesh = buildMesh(makeBoxGrid(CellType::Tetra, 14, kBox, radial, 0.25f), "shell");
-  keepTets(mesh, [](Vec3f centroid) {
-    const float r = length(centroid);
-    return r > 0.45f && r < 0.95f && !(centroid.x > 0.2f && centroid.y > 0.2f);
-  });
+  keepTets(mesh, inNotchedShell);
   return mesh;
+}
+
+/// The notched shell in hexahedra, their faces bent by the jitter.
+Mesh notchedHexShell() {
+  return buildMesh(keepCells(makeBoxGrid(CellType::Hexahedron, 14, kBox, radial, 0.25f), inNotchedShell),
+                   "hex shell");
+}
+
+/// A lattice of pyramids (six around each cube's centre) whose pyramids on the box's faces are each cut into
+/// two tets: tets, pyramids and the faces between them.
+Mesh pyramidsAndTets() {
+  const UnstructuredGrid pyramids = makeBoxGrid(CellType::Pyramid, 6, kBox, radial, 0.2f);
+  UnstructuredGrid mixed = keepCells(pyramids, [](Vec3f) { return false; });
+  for (size_t c = 0; c + 1 < pyramids.offsets.size(); ++c) {
+    const int64_t *v = pyramids.connectivity.data() + pyramids.offsets[c]; // base 0-3, apex 4
+    bool onBox = false;
+    for (int axis = 0; axis < 3; ++axis) {
+      bool same = true;
+      for (int i = 0; i < 4; ++i)
+        same = same && std::fabs(pyramids.points[size_t(v[i])][axis]) == 1.f &&
+               pyramids.points[size_t(v[i])][axis] == pyramids.points[size_t(v[0])][axis];
+      onBox = onBox || same;
+    }
+    const std::vector<std::vector<int64_t>> cells =
+        onBox ? std::vector<std::vector<int64_t>>{{v[0], v[1], v[2], v[4]}, {v[0], v[2], v[3], v[4]}}
+              : std::vector<std::vector<int64_t>>{{v[0], v[1], v[2], v[3], v[4]}};
+    for (const std::vector<int64_t> &cell : cells) {
+      mixed.connectivity.insert(mixed.connectivity.end(), cell.begin(), cell.end());
+      mixed.offsets.push_back(int64_t(mixed.connectivity.size()));
+      mixed.types.push_back(cell.size() == 4 ? uint8_t(10) : uint8_t(14));
+    }
+  }
+  return buildMesh(std::move(mixed), "pyramids and tets");
 }
 
 Camera obliqueCamera() {
@@ -187,24 +247,10 @@ TEST_P(Integrator, AdaptiveStepsKeepTheTransmittance) {
 // the cells just past the hole are not lost with it. Each pixel's transmittance stays within one long step of
 // the fixed-step marcher's, and every long-step frame is as opaque overall as that one.
 TEST_P(Integrator, LongStepsPastAHoleKeepTheCellsBehindIt) {
-  UnstructuredGrid grid = makeBoxGrid(CellType::Hexahedron, 16, kBox, radial);
-  UnstructuredGrid holed = grid;
-  holed.offsets = {0};
-  holed.connectivity.clear();
-  holed.types.clear();
-  for (size_t c = 0; c + 1 < grid.offsets.size(); ++c) {
-    Vec3f centre{0.f, 0.f, 0.f};
-    for (int64_t i = grid.offsets[c]; i < grid.offsets[c + 1]; ++i)
-      centre = centre + grid.points[size_t(grid.connectivity[size_t(i)])] * 0.125f;
-    if (std::fabs(centre.x) < 0.1f && std::fabs(centre.y) < 0.6f) // a slot two cells wide
-      continue;
-    holed.connectivity.insert(holed.connectivity.end(), grid.connectivity.begin() + grid.offsets[c],
-                              grid.connectivity.begin() + grid.offsets[c + 1]);
-    holed.offsets.push_back(int64_t(holed.connectivity.size()));
-    holed.types.push_back(grid.types[c]);
-  }
-  holed.fields.resize(1); // the point field; the cell field's values would no longer match the cells
-  const Mesh mesh = buildMesh(std::move(holed), "slotted box");
+  const Mesh mesh = buildMesh( // a slot two cells wide
+      keepCells(makeBoxGrid(CellType::Hexahedron, 16, kBox, radial),
+                [](Vec3f centre) { return !(std::fabs(centre.x) < 0.1f && std::fabs(centre.y) < 0.6f); }),
+      "slotted box");
   Renderer renderer(mesh, mesh.findField("f"), 32);
   // Opacity constant, colour varying near the centre only: the other partitions take the long step.
   const float alphaPerUnit = 0.3f;
@@ -497,6 +543,90 @@ TEST_P(Integrator, GapsBetweenBoundaryCrossingsTakeNoSample) {
     }
     EXPECT_GT(across, 1000);
   }
+}
+
+// The boundary faces of meshes with other cells than tets: the faces with no cell across, a tet's too where
+// no pyramid lies across it. On a box their areas add up to the box's, each face counted once.
+TEST(BoundaryCrossings, CellFacesCoverTheBoundaryOnce) {
+  std::vector<Mesh> meshes;
+  meshes.push_back(buildMesh(makeBoxGrid(CellType::Hexahedron, 5, kBox, radial, 0.2f), "hexes"));
+  meshes.push_back(pyramidsAndTets());
+  for (const Mesh &mesh : meshes) {
+    const MeshView view = makeMeshView(mesh, -1);
+    const std::vector<uint32_t> tetNeighbors = buildTetNeighbors(mesh);
+    const std::vector<uint32_t> faces = listBoundaryCellFaces(
+        view, tetNeighbors.empty() ? nullptr : tetNeighbors.data(), buildCellNeighbors(mesh));
+    EXPECT_TRUE(std::is_sorted(faces.begin(), faces.end()));
+    double area = 0.0;
+    uint64_t tetFaces = 0;
+    for (uint32_t face : faces) {
+      Vec3f c[4], inner;
+      const int count = boundaryFaceCorners(view, face, c, inner);
+      area += 0.5 * double(length(cross(c[1] - c[0], c[2] - c[0])));
+      if (count == 4)
+        area += 0.5 * double(length(cross(c[2] - c[0], c[3] - c[0])));
+      tetFaces += boundaryFaceCell(view, face) < view.tetCount;
+    }
+    EXPECT_NEAR(area, 24.0, 1e-3) << mesh.tetCount() << " tets";
+    EXPECT_EQ(tetFaces > 0, mesh.tetCount() > 0);
+  }
+}
+
+// Boundary crossings of other cells than tets: on the notched shell in hexahedra (their faces bent, each
+// crossed as two triangles) and on a box of pyramids and tets, the skipping modes give `reference`'s image,
+// from outside and from within the cavity, and a ray that crosses no boundary face takes no sample.
+TEST_P(Integrator, BoundaryCrossingsOfOtherCellsLeaveTheImageAsItIs) {
+  std::vector<Mesh> meshes;
+  meshes.push_back(notchedHexShell());
+  meshes.push_back(pyramidsAndTets());
+  Camera inside;
+  inside.eye = {0.02f, -0.03f, 0.01f};
+  inside.at = {1.f, 0.4f, 0.2f};
+  inside.fovy = 70.f;
+  for (const Mesh &mesh : meshes) {
+    Renderer renderer(mesh, mesh.findField("f"), 32);
+    renderer.setTransferFunction(TransferFunction(constantMap(0.3f), 0.f, 1.f));
+    for (const Camera &camera : {obliqueCamera(), inside}) {
+      const Frame reference = renderer.render(camera, settingsFor(RenderMode::Reference, 0.013f));
+      ASSERT_GT(reference.samplesTotal, 0u);
+      for (RenderMode mode : {RenderMode::Skip, RenderMode::Full}) {
+        const Frame frame = renderer.render(camera, settingsFor(mode, 0.013f));
+        expectSameFrame(reference, frame, 1e-5f, 1);
+      }
+    }
+    const RenderSettings settings = settingsFor(RenderMode::Skip, 0.013f);
+    const MeshView view = makeMeshView(mesh, -1);
+    const std::vector<uint32_t> tetNeighbors = buildTetNeighbors(mesh);
+    std::vector<uint64_t> start, keys;
+    findBoundaryCrossings(view,
+                          listBoundaryCellFaces(view, tetNeighbors.empty() ? nullptr : tetNeighbors.data(),
+                                                buildCellNeighbors(mesh)),
+                          makeCameraView(obliqueCamera(), settings.width, settings.height), start, keys);
+    const Frame skip = renderer.render(obliqueCamera(), settings);
+    int uncrossed = 0, crossed = 0;
+    for (size_t pixel = 0; pixel + 2 < start.size(); ++pixel) {
+      if (start[pixel] == start[pixel + 1]) {
+        EXPECT_EQ(skip.samplesPerPixel[pixel], 0u) << "pixel " << pixel;
+        ++uncrossed;
+      }
+      crossed += start[pixel] != start[pixel + 1];
+    }
+    EXPECT_GT(uncrossed, 0);
+    EXPECT_GT(crossed, 1000);
+  }
+}
+
+// On the notched hex shell seen from outside, with a function opaque in the shell's inner half, `skip`
+// marches each ray only from where it enters the shell until it turns opaque: without the crossings it
+// marched the empty space in the partitions' boxes (the corners of the box, the notch, around the shell).
+TEST_P(Integrator, SkippingHexahedraMarchesFromTheBoundary) {
+  const Mesh mesh = notchedHexShell();
+  Renderer renderer(mesh, mesh.findField("f"), 32);
+  renderer.setTransferFunction(TransferFunction(rampMap(), 0.f, 1.f));
+  const Frame reference = renderer.render(obliqueCamera(), settingsFor(RenderMode::Reference, 0.013f));
+  const Frame skip = renderer.render(obliqueCamera(), settingsFor(RenderMode::Skip, 0.013f));
+  expectSameFrame(reference, skip, 1e-5f, 1);
+  EXPECT_LT(2 * skip.samplesTotal, reference.samplesTotal);
 }
 
 // Along a ray that enters the mesh at t = 1, leaves at 3, enters again at 6 and leaves at 9, samples in the

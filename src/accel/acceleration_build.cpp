@@ -35,6 +35,8 @@ HostAcceleration buildHostAcceleration(const Mesh &mesh, const MeshView &view, u
   built.seeds = buildSeedGrid(view, built.tetNeighbors.empty() ? nullptr : built.tetNeighbors.data());
   if (!built.tetNeighbors.empty() && listsBoundaryFaces(view))
     built.boundaryFaceList = listBoundaryFaces(built.tetNeighbors);
+  else if (!built.cellNeighbors.empty())
+    built.boundaryFaceList = listBoundaryCellFaces(view, dataOrNull(built.tetNeighbors), built.cellNeighbors);
   if (!built.tetNeighbors.empty() && walkAidFits(view.tetCount * sizeof(TetAffine)))
     built.tetAffine = buildTetAffine(view);
   return built;

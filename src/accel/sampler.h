@@ -367,8 +367,8 @@ template <class Sampling> struct RaySampler {
     }
   }
 
-  /// Moves to `tet`, one the ray enters the mesh by.
-  UVR_HOST_DEVICE void enter(uint32_t tet) { at.enter(tet); }
+  /// Moves to `cell`, one the ray enters the mesh by.
+  UVR_HOST_DEVICE void enter(uint32_t cell) { at.enter(cell); }
   /// The cell of the last sample located, or the one near it the sampler started from.
   UVR_HOST_DEVICE uint32_t cell() const { return at.cell; }
 

@@ -148,8 +148,8 @@ UVR_HOST_DEVICE inline bool insideReference(Vec3f r, int n) {
 }
 
 /// Inverts x(r) = sum_i N_i(r) p_i by Newton's method: the parametric coordinates `r` of `p`; false where `p`
-/// lies outside the cell's box, the iteration runs far outside the reference cell, or the cell is degenerate.
-/// The caller tells inside from outside (insideReference).
+/// lies outside the cell's box, the iteration runs far outside the reference cell or does not converge, or
+/// the cell is degenerate. The caller tells inside from outside (insideReference).
 template <int N>
 UVR_HOST_DEVICE inline bool parametricCoordinates(const Vec3f *points, const uint32_t *v, Vec3f p, Vec3f &r) {
   Vec3f corner[N];
@@ -167,22 +167,51 @@ UVR_HOST_DEVICE inline bool parametricCoordinates(const Vec3f *points, const uin
   if (p.x < lower.x - slack || p.y < lower.y - slack || p.z < lower.z - slack || p.x > upper.x + slack ||
       p.y > upper.y + slack || p.z > upper.z + slack)
     return false;
+  // About the first corner: far from the origin, absolute coordinates would leave the residual's rounding
+  // above the tolerance below, and the iteration would never see it converge.
+  const Vec3f origin = corner[0];
+  for (int i = 0; i < N; ++i)
+    corner[i] = corner[i] - origin;
+  p = p - origin;
 
-  ShapeFunctions<N> s; // the iteration's own: the caller evaluates the weights once, where it needs them
-  r = {1.f / 3.f, 1.f / 3.f, 0.5f}; // inside all three reference cells, away from the pyramid's apex
+  // A hexahedron's map as a polynomial, x = b u + c v + d w + e uv + f vw + g uw + h uvw about corner 0: an
+  // iteration then costs half of what its shape functions' sums do.
+  Vec3f b, c, d, e, f, g, h;
+  if constexpr (N == 8) {
+    b = corner[1], c = corner[3], d = corner[4];
+    e = corner[2] - corner[1] - corner[3];
+    f = corner[7] - corner[3] - corner[4];
+    g = corner[5] - corner[1] - corner[4];
+    h = corner[6] - corner[2] - corner[5] - corner[7] + corner[1] + corner[3] + corner[4];
+  }
+  // Inside all three reference cells, away from the pyramid's apex; a hexahedron's centre, from which a
+  // damped step reaches any point of the cube.
+  r = N == 8 ? Vec3f{0.5f, 0.5f, 0.5f} : Vec3f{1.f / 3.f, 1.f / 3.f, 0.5f};
+  bool converged = false;
   for (int iteration = 0; iteration < 16; ++iteration) {
-    evaluateShape(r, s);
-    Vec3f residual = Vec3f{} - p;
-    Vec3f dr{}, ds{}, dt{};
-    for (int i = 0; i < N; ++i) {
-      residual = residual + corner[i] * s.value[i];
-      dr = dr + corner[i] * s.derivative[i].x;
-      ds = ds + corner[i] * s.derivative[i].y;
-      dt = dt + corner[i] * s.derivative[i].z;
+    Vec3f residual, dr, ds, dt;
+    if constexpr (N == 8) {
+      const float u = r.x, v = r.y, w = r.z;
+      residual = b * u + c * v + d * w + e * (u * v) + f * (v * w) + g * (u * w) + h * (u * v * w) - p;
+      dr = b + e * v + g * w + h * (v * w);
+      ds = c + e * u + f * w + h * (u * w);
+      dt = d + f * v + g * u + h * (u * v);
+    } else {
+      ShapeFunctions<N> s; // the iteration's own: the caller evaluates the weights once, where it needs them
+      evaluateShape(r, s);
+      residual = Vec3f{} - p;
+      for (int i = 0; i < N; ++i) {
+        residual = residual + corner[i] * s.value[i];
+        dr = dr + corner[i] * s.derivative[i].x;
+        ds = ds + corner[i] * s.derivative[i].y;
+        dt = dt + corner[i] * s.derivative[i].z;
+      }
     }
     // Converged; also the way out at a pyramid's apex, where the Jacobian is singular.
-    if (fabsf(residual.x) + fabsf(residual.y) + fabsf(residual.z) <= 1e-6f * scale)
+    if (fabsf(residual.x) + fabsf(residual.y) + fabsf(residual.z) <= 1e-6f * scale) {
+      converged = true;
       break;
+    }
     // Solve J * delta = residual by Cramer's rule; J's columns are dx/dr, dx/ds, dx/dt.
     const float det = det3(dr, ds, dt);
     if (!(det != 0.f))
@@ -203,7 +232,9 @@ UVR_HOST_DEVICE inline bool parametricCoordinates(const Vec3f *points, const uin
     r.x = clampf(r.x, 0.f, 1.f);
     r.y = clampf(r.y, 0.f, 1.f);
   }
-  return true;
+  // Unconverged, r says nothing of where `p` lies: near a distorted cell the damped steps can stall inside
+  // the reference cell with `p` outside.
+  return converged;
 }
 
 /// The shape functions' weights at `p` into `s`; false where `p` lies outside the cell.

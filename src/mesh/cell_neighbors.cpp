@@ -87,6 +87,50 @@ std::vector<uint32_t> buildCellNeighbors(const Mesh &cells) {
   return neighbors;
 }
 
+std::vector<uint32_t> listBoundaryCellFaces(const MeshView &mesh, const uint32_t *tetNeighbors,
+                                            const std::vector<uint32_t> &cellNeighbors) {
+  const uint64_t otherCells = mesh.cellCount() - mesh.tetCount;
+  if (otherCells == 0 || mesh.cellCount() > (uint64_t(1) << 29) || (mesh.tetCount > 0 && !tetNeighbors) ||
+      cellNeighbors.size() != kMaxCellFaces * otherCells)
+    return {};
+  // A tet face that another cell shares has no tet across: a bit per face marks those the other cells name.
+  std::vector<uint8_t> sharedTetFaces(mesh.tetCount, 0);
+  for (uint64_t other = 0; other < otherCells; ++other) {
+    const uint64_t cell = mesh.tetCount + other;
+    int count;
+    const uint32_t *v = cellCorners(mesh, cell, count);
+    const CellFaces faces = cellFaces(cellType(mesh, cell));
+    for (int f = 0; f < faces.count; ++f) {
+      const uint32_t across = cellNeighbors[kMaxCellFaces * other + uint64_t(f)];
+      if (across >= mesh.tetCount)
+        continue;
+      // The tet's face is the one opposite its corner that the face does not hold.
+      const uint32_t *tet = mesh.tets + 4 * uint64_t(across);
+      for (int corner = 0; corner < 4; ++corner) {
+        bool held = false;
+        for (int k = 0; k < 4 && faces.corners[f][k] >= 0; ++k)
+          held = held || v[faces.corners[f][k]] == tet[corner];
+        if (!held)
+          sharedTetFaces[across] |= uint8_t(1u << corner);
+      }
+    }
+  }
+  std::vector<uint32_t> faces;
+  const uint32_t bits = boundaryFaceBits(mesh);
+  for (uint64_t tet = 0; tet < mesh.tetCount; ++tet)
+    for (uint32_t i = 0; i < 4; ++i)
+      if (tetNeighbors[4 * tet + i] == kNoCell && !((sharedTetFaces[tet] >> i) & 1u))
+        faces.push_back(uint32_t(tet << bits) + i);
+  for (uint64_t other = 0; other < otherCells; ++other) {
+    const uint64_t cell = mesh.tetCount + other;
+    const int count = cellFaces(cellType(mesh, cell)).count;
+    for (int f = 0; f < count; ++f)
+      if (cellNeighbors[kMaxCellFaces * other + uint64_t(f)] == kNoCell)
+        faces.push_back(uint32_t(cell << bits) + uint32_t(f));
+  }
+  return faces;
+}
+
 std::vector<Vec4f> buildCellFacePlanes(const MeshView &mesh) {
   const uint64_t otherCells = mesh.cellCount() - mesh.tetCount;
   std::vector<Vec4f> planes(kMaxCellFaces * otherCells, Vec4f{0.f, 0.f, 0.f, -INFINITY});

@@ -35,6 +35,50 @@ UVR_HOST_DEVICE inline CellFaces cellFaces(CellType type) {
   }
 }
 
+/// Boundary faces (cell faces with no cell across) are numbered (cell << bits) + face: 2 bits in a mesh of
+/// tets alone (4 * tet + i, face i being the one opposite corner i), so that up to 2^30 tets number theirs
+/// in 32 bits; 3 bits where there are other cells (their faces in cellFaces' order, a tet's as above).
+UVR_HOST_DEVICE inline uint32_t boundaryFaceBits(const MeshView &mesh) {
+  return mesh.cellCount() == mesh.tetCount ? 2u : 3u;
+}
+
+/// The cell that boundary face `face` bounds.
+UVR_HOST_DEVICE inline uint32_t boundaryFaceCell(const MeshView &mesh, uint32_t face) {
+  return face >> boundaryFaceBits(mesh);
+}
+
+/// The corners of boundary face `face` in order around it, into `corners`: 3, or 4 for a quadrilateral; and
+/// into `inner` a point on the cell's side of the face (a tet's opposite corner, another cell's centre).
+UVR_HOST_DEVICE inline int boundaryFaceCorners(const MeshView &mesh, uint32_t face, Vec3f corners[4],
+                                               Vec3f &inner) {
+  const uint32_t bits = boundaryFaceBits(mesh), i = face & ((1u << bits) - 1u);
+  int count;
+  const uint32_t *v = cellCorners(mesh, face >> bits, count);
+  if (count == 4) {
+    for (uint32_t k = 0; k < 3; ++k)
+      corners[k] = mesh.points[v[(i + 1 + k) & 3u]];
+    inner = mesh.points[v[i]];
+    return 3;
+  }
+  Vec3f centre{};
+  for (int k = 0; k < count; ++k)
+    centre = centre + mesh.points[v[k]];
+  inner = centre * (1.f / float(count));
+  const CellFaces faces = cellFaces(cellType(mesh, face >> bits));
+  const int8_t *c = faces.corners[i];
+  const int cornerCount = c[3] < 0 ? 3 : 4;
+  for (int k = 0; k < cornerCount; ++k)
+    corners[k] = mesh.points[v[c[k]]];
+  return cornerCount;
+}
+
+/// The boundary faces of a mesh that has other cells than tets, numbered as boundaryFaceBits says, in
+/// increasing order: the faces with no cell across in `cellNeighbors` (buildCellNeighbors) or, for a tet,
+/// in `tetNeighbors` (buildTetNeighbors, null where there are no tets) with no other cell sharing it. Empty
+/// for a mesh of tets alone or of more than 2^29 cells.
+std::vector<uint32_t> listBoundaryCellFaces(const MeshView &mesh, const uint32_t *tetNeighbors,
+                                            const std::vector<uint32_t> &cellNeighbors);
+
 /// For each cell that is not a tet and each of its faces (cellFaces' order), the cell across it, a tet
 /// included, or kNoCell: kMaxCellFaces entries per cell, at kMaxCellFaces * (cell - tet count). Empty for a
 /// mesh of tets alone.

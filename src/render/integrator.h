@@ -156,12 +156,12 @@ struct RayMarch : ShadeState<kShade || kIso>, IsoState<kIso> {
     }
     for (float t = grid.at(k); closing || t < tb; k = kNext, t = grid.at(k)) {
       // Grid points in the gaps between the ray's crossings out of the mesh and back in are passed over; the
-      // march goes on from the tet the ray re-enters by.
+      // march goes on from the cell the ray re-enters by.
       if (!closing && intervals.hasGaps()) {
         uint32_t entered;
         const float resume = intervals.pastGap(t, entered);
         if (entered != kNoCell)
-          sampler.enter(entered >> 2);
+          sampler.enter(boundaryFaceCell(scene.mesh, entered));
         if (resume > t) {
           if constexpr (kIso)
             this->lastValid = false; // the field is not continuous across the gap
@@ -404,8 +404,8 @@ integrateRay(const SceneView &scene, const IntegratorSettings &settings, const R
   // plain way, as the paper's reference ray marcher does. Where the crossings are listed, the occupancy grid
   // would only confirm that samples lie in cells.
   RaySampler<Sampling> sampler(scene, ray, hint, skipsSpace(settings.mode), !intervals.crossingsListed());
-  if (intervals.entryTet() != kNoCell)
-    sampler.enter(intervals.entryTet());
+  if (intervals.entryCell() != kNoCell)
+    sampler.enter(intervals.entryCell());
   // The next ray's grid starts where it enters the mesh bounds, as this one's does.
   sampler.follow(trail, settings.clip.empty() ? scene.partitions.rootBounds : settings.gridBounds,
                  intervals.grid().spacing);

@@ -168,9 +168,9 @@ public:
   /// Where the ray enters and leaves the mesh bounds (clipped to the piece's region, if any).
   UVR_HOST_DEVICE float boundsEnter() const { return tEnter_; }
   UVR_HOST_DEVICE float boundsExit() const { return tExit_; }
-  /// The tet the ray enters the mesh by, where the skipping modes know it; else kNoCell.
-  UVR_HOST_DEVICE uint32_t entryTet() const {
-    return skip_ && crossings_.face != kNoCell ? crossings_.face >> 2 : kNoCell;
+  /// The cell the ray enters the mesh by, where the skipping modes know it; else kNoCell.
+  UVR_HOST_DEVICE uint32_t entryCell() const {
+    return skip_ && crossings_.face != kNoCell ? boundaryFaceCell(scene_.mesh, crossings_.face) : kNoCell;
   }
   /// Whether every crossing is listed: samples then lie between them, in cells but for the margins.
   UVR_HOST_DEVICE bool crossingsListed() const { return crossings_.keys != nullptr; }

@@ -242,10 +242,19 @@ CudaBackend::CudaBackend(const Mesh &hostMesh, const MeshView &mesh, uint32_t le
   const uint64_t otherCells = mesh.cellCount() - mesh.tetCount;
   size_t freeBytes = 0, totalBytes = 0;
   UVR_CUDA_CHECK(cudaMemGetInfo(&freeBytes, &totalBytes));
-  if (!d.lean && otherCells > 0 && cellAdjacencyBytes(otherCells) <= freeBytes / 8) {
+  if (!d.lean && otherCells > 0) {
     const Timer adjacency;
-    copyMember(d.accel.cellNeighbors, buildCellNeighbors(hostMesh));
-    copyMember(d.accel.cellFacePlanes, buildCellFacePlanes(mesh));
+    const std::vector<uint32_t> cellNeighbors = buildCellNeighbors(hostMesh);
+    // The boundary faces of the tets and the other cells, for the frames' crossings: a few bytes a cell,
+    // kept where the walks' adjacency and planes would not fit.
+    std::vector<uint32_t> tetNeighbors;
+    copyMember(tetNeighbors, d.accel.tetNeighbors);
+    copyMember(d.accel.boundaryFaceList,
+               listBoundaryCellFaces(mesh, dataOrNull(tetNeighbors), cellNeighbors));
+    if (cellAdjacencyBytes(otherCells) <= freeBytes / 8) {
+      copyMember(d.accel.cellNeighbors, cellNeighbors);
+      copyMember(d.accel.cellFacePlanes, buildCellFacePlanes(mesh));
+    }
     d.buildSteps.emplace_back("cell adjacency (host)", adjacency.milliseconds());
   }
   d.buildMs = timer.milliseconds();
