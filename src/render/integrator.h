@@ -326,13 +326,10 @@ private:
       if (color.w >= settings.terminationOpacity)
         return; // the ray ends here: no sample follows
     }
-    // Back to the sample's own cell where its gradient is taken, by a walk from the crossing's (before it on
-    // the ray). Else the next sample's walk starts from there.
-    if (moved && drawsVolume() && shadesVolume()) {
-      ++samples;
-      if (!sampler.probe(t, walkSteps, false, value))
-        sampler.at.enter(this->lastCell);
-    }
+    // Back to the sample's own cell, for its gradient (from the corners: its record is not kept) and the next
+    // walk.
+    if (moved)
+      sampler.at.enter(this->lastCell);
   }
 
   /// Where `cell`, a tet the walk passed on the ray, holds the crossing of `target` in [lo, hi]: the field
