@@ -110,6 +110,61 @@ TEST(Isosurface, OfALinearFieldIsTheExactPlane) {
   }
 }
 
+TEST(Isosurface, TranslucentPlanesEachLieExactlyWhereTheFieldTakesTheirValue) {
+  // The linear field of the test above, three planes of opacity 0.5 a little more than a step apart: rays
+  // march on past each, often two in one bracket, and the sampler leaves the tet of the sample to find them.
+  // With the volume drawn (transparent) and shaded, it goes back to the sample's tet for its gradient. Each
+  // plane is found where the field takes its value: the opacity just before and after it tells.
+  const Vec3f slope{0.3f, -0.2f, 0.4f};
+  const auto linear = [&](Vec3f p) { return 0.5f + dot(slope, p); };
+  const Mesh mesh = buildMesh(makeBoxGrid(CellType::Tetra, 10, kBox, linear, 0.3f), "box");
+  Renderer renderer(mesh, mesh.findField("f"), 32);
+  renderer.setTransferFunction(transparent());
+  const float targets[] = {0.55f, 0.57f, 0.59f};
+  const Camera camera = cameraAt({0.6f, 0.9f, 4.f});
+  for (const bool hideVolume : {true, false}) {
+    RenderSettings settings =
+        isoFrame({targets[0], targets[1], targets[2]}, RenderMode::Full, hideVolume, 32);
+    settings.iso.opacity = 0.5f;
+    settings.integrator.shade = !hideVolume;
+    const CameraView view = makeCameraView(camera, settings.width, settings.height);
+    for (int plane = 0; plane < 3; ++plane) {
+      std::vector<float> before(32 * 32), after(32 * 32);
+      std::vector<bool> hits(32 * 32);
+      int tested = 0;
+      for (int y = 0; y < 32; ++y)
+        for (int x = 0; x < 32; ++x) {
+          const Ray ray = view.ray(x, y);
+          const float t = (targets[plane] - linear(ray.origin)) / dot(slope, ray.direction);
+          const Vec3f p = ray.at(t);
+          const size_t i = size_t(y) * 32 + size_t(x);
+          // The field falls along these rays: the planes of higher value come first. All well inside the box.
+          const float tFirst = (targets[2] - linear(ray.origin)) / dot(slope, ray.direction);
+          const Vec3f first = ray.at(tFirst);
+          hits[i] = tFirst > 0.f && std::fabs(p.x) < 0.9f && std::fabs(p.y) < 0.9f && std::fabs(p.z) < 0.9f &&
+                    std::fabs(first.x) < 0.9f && std::fabs(first.y) < 0.9f && std::fabs(first.z) < 0.9f;
+          tested += hits[i];
+          before[i] = hits[i] ? t * (1.f - 2e-5f) : 0.f;
+          after[i] = hits[i] ? t * (1.f + 2e-5f) : 0.f;
+        }
+      ASSERT_GT(tested, 100);
+      settings.rayLimits = before.data();
+      const Frame short_ = renderer.render(camera, settings);
+      settings.rayLimits = after.data();
+      const Frame long_ = renderer.render(camera, settings);
+      const int passed = 2 - plane; // planes before this one along the ray
+      const float opacityBefore = 1.f - std::pow(0.5f, float(passed));
+      const float opacityAfter = 1.f - std::pow(0.5f, float(passed + 1));
+      for (size_t i = 0; i < hits.size(); ++i) {
+        if (!hits[i])
+          continue;
+        EXPECT_NEAR(short_.opacity[i], opacityBefore, 1e-5f) << "plane " << plane << ", pixel " << i;
+        EXPECT_NEAR(long_.opacity[i], opacityAfter, 1e-5f) << "plane " << plane << ", pixel " << i;
+      }
+    }
+  }
+}
+
 TEST(Isosurface, OfASphereIsClosedFromEveryView) {
   // The distance from the centre, meshed into tets (and hexes, whose crossings are bracketed and refined),
   // small partitions: every ray aimed inside the sphere's silhouette meets the surface, every ray that passes

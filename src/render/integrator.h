@@ -54,11 +54,14 @@ template <> struct ShadeState<true> {
 
 template <bool kIso> struct IsoState {}; ///< no surfaces, nothing
 
-/// What a march that draws isosurfaces carries: the last point where the field is known.
+/// What a march that draws isosurfaces carries: the last point where the field is known. Of its cell, the
+/// index and the field's slope along the ray, not the whole record (RayCell): the GPU's kernels then keep
+/// no second one, and a crossing there is still found without a probe.
 template <> struct IsoState<true> {
   const IsoSettings *iso;
   float lastT = 0.f, lastValue = 0.f;
-  RayCell lastCell;              ///< the cell of the last point: a crossing there is closed-form too
+  uint32_t lastCell = kNoCell;   ///< the cell of the last point
+  float lastSlope = NAN;         ///< the field's change per unit t there, where the cell is a tet
   bool lastValid = false;        ///< whether a cell held the last point, and the field is continuous since
   float intervalEnd = -INFINITY; ///< where the last interval marched ends
 };
@@ -299,31 +302,34 @@ private:
       return; // behind what is known already (a closing sample past a probe)
     const bool bracket = this->lastValid && inside;
     const float t0 = this->lastT, v0 = this->lastValue;
+    const uint32_t cell0 = this->lastCell;
+    const float slope0 = this->lastSlope;
     this->lastT = t;
     this->lastValue = value;
     this->lastValid = inside;
-    const RayCell before = this->lastCell;
-    this->lastCell = sampler.at;
+    this->lastCell = sampler.cell();
+    this->lastSlope = sampler.at.affine ? sampler.at.dvalue : NAN;
     if (!bracket)
       return;
     const IsoSettings &iso = *this->iso;
     const bool rising = value > v0;
-    const RayCell atSample = sampler.at;
     bool moved = false;
     for (uint32_t j = 0; j < iso.count; ++j) {
       const uint32_t i = rising ? j : iso.count - 1 - j;
       if (!crossesValue(v0, value, iso.values[i]))
         continue;
-      const float hit = isoCrossing(iso.values[i], t0, v0, t, value, before, samples, walkSteps);
-      moved = true;
+      const float hit = isoCrossing(iso.values[i], t0, v0, t, value, cell0, slope0, samples, walkSteps);
+      moved = moved || sampler.cell() != this->lastCell;
       const Vec3f gradient = sampler.pointVectorAt(this->shading->gradients, hit);
       const Vec3f rgb = shadeSurface(iso.colors[i], gradient, this->toEye, *this->shading);
       compositeBehind(color, {rgb.x, rgb.y, rgb.z, iso.opacity});
       if (color.w >= settings.terminationOpacity)
-        break;
+        return; // the ray ends here: no sample follows
     }
+    // Back to the sample's own cell, for its gradient (from the corners: its record is not kept) and the next
+    // walk.
     if (moved)
-      sampler.at = atSample; // the sample's own cell, for its gradient and the next walk
+      sampler.at.enter(this->lastCell);
   }
 
   /// Where `cell`, a tet the walk passed on the ray, holds the crossing of `target` in [lo, hi]: the field
@@ -339,23 +345,37 @@ private:
     return lowest >= -kInsideTolerance && root >= lo - slack && root <= hi + slack;
   }
 
-  /// Where the field crosses `target` between `t0` (value `v0`, in cell `cell0`) and `t1` (`v1`), from the
-  /// sampler in `t1`'s cell: in a tet the field is linear along the ray, so the root is closed-form once the
-  /// tet that holds it is found (mostly one of the two); each step locates the best guess so far (that root,
-  /// else regula falsi, every other step a bisection) and keeps the bracket around the crossing. The sampler
-  /// ends in (or next to) its cell.
-  UVR_HOST_DEVICE float isoCrossing(float target, float t0, float v0, float t1, float v1,
-                                    const RayCell &cell0, uint32_t &samples, int walkSteps) {
+  /// Where the field crosses `target` between `t0` (value `v0`, in cell `cell0`, where it changes by `slope0`
+  /// per unit t) and `t1` (`v1`), from the sampler in `t1`'s cell (or a nearer crossing's): in a tet the
+  /// field is linear along the ray, so the root is closed-form once the tet that holds it is found (mostly
+  /// one of the two); each step locates the best guess so far (that root, else regula falsi, every other step
+  /// a bisection) and keeps the bracket around the crossing. The sampler ends in (or next to) its cell.
+  UVR_HOST_DEVICE float isoCrossing(float target, float t0, float v0, float t1, float v1, uint32_t cell0,
+                                    float slope0, uint32_t &samples, int walkSteps) {
     float lo = t0, hi = t1, fLo = v0 - target, fHi = v1 - target;
     float root;
-    if (rootInTet(cell0, target, lo, hi, root)) {
-      sampler.at = cell0; // for the gradient there
-      return clampf(root, lo, hi);
+    const bool inSampleTet = rootInTet(sampler.at, target, lo, hi, root);
+    // The nearer crossing first: `t0`'s tet holds one where its line meets the target in the bracket (NaN
+    // for other cells) and the point found lies in it, which a probe there from that tet tells. Where not,
+    // and the sample's tet holds one, the sampler goes back there for its gradient.
+    const float nearRoot = t0 + (target - v0) / slope0;
+    if (cell0 != sampler.cell() && nearRoot >= lo && nearRoot <= (inSampleTet ? root : hi)) {
+      float value;
+      sampler.at.enter(cell0);
+      ++samples;
+      if (sampler.probe(nearRoot, walkSteps, false, value) && sampler.cell() == cell0)
+        return nearRoot;
+      if (inSampleTet) {
+        ++samples;
+        sampler.probe(root, walkSteps, false, value);
+      }
     }
+    if (inSampleTet)
+      return clampf(root, lo, hi);
     for (int step = 0; step < kIsoRefineSteps; ++step) {
-      float t = lo - fLo * (hi - lo) / (fHi - fLo);
       if (rootInTet(sampler.at, target, lo, hi, root))
         return clampf(root, lo, hi);
+      float t = lo - fLo * (hi - lo) / (fHi - fLo);
       if (sampler.at.affine && sampler.at.dvalue != 0.f)
         t = root;
       if ((step & 1) || !(lo < t && t < hi))

@@ -42,11 +42,13 @@ dim3 renderBlock(RenderMode mode, bool tiles) {
 /// docs/results/log.md.)
 constexpr int kMarchingBlocksPerSm = 5, kSkippingBlocksPerSm = 4;
 
+/// The isosurfaces are a __grid_constant__: the march reads them through a pointer, which would otherwise
+/// copy them (140 bytes) to each thread's stack.
 template <class Sampling, int BlocksPerSm, bool kPreintegrate, bool kShade, bool kIso>
 __global__ void __launch_bounds__(kRenderBlockThreads, BlocksPerSm)
     renderKernel(SceneView scene, IntegratorSettings settings, CameraView camera, PixelTarget target,
                  int height, const uint64_t *crossingStart, const uint64_t *crossingKeys,
-                 SampleTotals *samples, ShadingSettings shading, IsoSettings iso) {
+                 SampleTotals *samples, ShadingSettings shading, const __grid_constant__ IsoSettings iso) {
   const int x = int(blockIdx.x * blockDim.x + threadIdx.x);
   const int y = int(blockIdx.y * blockDim.y + threadIdx.y);
   uint32_t taken = 0; // pixels past the frame's edge take none, and still join the warp's sums below
