@@ -33,6 +33,21 @@ TransferFunction translucent() {
   return TransferFunction(map, 0.f, 1.f);
 }
 
+/// f = 0.5 + 0.3 x - 0.2 y + 0.4 z: its isosurfaces are planes, and where a ray meets each is known.
+struct LinearField {
+  Vec3f slope{0.3f, -0.2f, 0.4f};
+  float operator()(Vec3f p) const { return 0.5f + dot(slope, p); }
+  /// Where `ray` meets the surface f = value.
+  float along(const Ray &ray, float value) const {
+    return (value - (*this)(ray.origin)) / dot(slope, ray.direction);
+  }
+  /// The field on jittered tets.
+  Mesh mesh() const { return buildMesh(makeBoxGrid(CellType::Tetra, 10, kBox, *this, 0.3f), "box"); }
+};
+
+/// Well inside kBox, away from its faces.
+bool wellInside(Vec3f p) { return std::fabs(p.x) < 0.9f && std::fabs(p.y) < 0.9f && std::fabs(p.z) < 0.9f; }
+
 RenderSettings isoFrame(std::initializer_list<float> values, RenderMode mode = RenderMode::Full,
                         bool hideVolume = true, int size = 64) {
   RenderSettings settings;
@@ -68,11 +83,10 @@ float missDistance(const Ray &ray) {
 } // namespace
 
 TEST(Isosurface, OfALinearFieldIsTheExactPlane) {
-  // f = 0.5 + 0.3 x - 0.2 y + 0.4 z on jittered tets: the surface f = 0.55 is a plane, and each ray's
-  // distance to it is known. Rays that end just before it see nothing; just past it, the surface.
-  const Vec3f slope{0.3f, -0.2f, 0.4f};
-  const auto linear = [&](Vec3f p) { return 0.5f + dot(slope, p); };
-  const Mesh mesh = buildMesh(makeBoxGrid(CellType::Tetra, 10, kBox, linear, 0.3f), "box");
+  // The surface f = 0.55 of a linear field is a plane, and each ray's distance to it is known. Rays that end
+  // just before it see nothing; just past it, the surface.
+  const LinearField linear;
+  const Mesh mesh = linear.mesh();
   Renderer renderer(mesh, mesh.findField("f"), 32);
   renderer.setTransferFunction(transparent());
   const float target = 0.55f;
@@ -86,12 +100,9 @@ TEST(Isosurface, OfALinearFieldIsTheExactPlane) {
     for (int y = 0; y < 32; ++y)
       for (int x = 0; x < 32; ++x) {
         const Ray ray = view.ray(x, y);
-        // Where the ray meets the plane: f(o + t d) = target.
-        const float t = (target - linear(ray.origin)) / dot(slope, ray.direction);
-        const Vec3f p = ray.at(t);
+        const float t = linear.along(ray, target);
         const size_t i = size_t(y) * 32 + size_t(x);
-        // Well inside the box, away from its faces.
-        hits[i] = t > 0.f && std::fabs(p.x) < 0.9f && std::fabs(p.y) < 0.9f && std::fabs(p.z) < 0.9f;
+        hits[i] = t > 0.f && wellInside(ray.at(t));
         tested += hits[i];
         before[i] = hits[i] ? t * (1.f - 2e-5f) : 0.f;
         after[i] = hits[i] ? t * (1.f + 2e-5f) : 0.f;
@@ -115,9 +126,8 @@ TEST(Isosurface, TranslucentPlanesEachLieExactlyWhereTheFieldTakesTheirValue) {
   // march on past each, often two in one bracket, and the sampler leaves the tet of the sample to find them.
   // With the volume drawn (transparent) and shaded, it goes back to the sample's tet for its gradient. Each
   // plane is found where the field takes its value: the opacity just before and after it tells.
-  const Vec3f slope{0.3f, -0.2f, 0.4f};
-  const auto linear = [&](Vec3f p) { return 0.5f + dot(slope, p); };
-  const Mesh mesh = buildMesh(makeBoxGrid(CellType::Tetra, 10, kBox, linear, 0.3f), "box");
+  const LinearField linear;
+  const Mesh mesh = linear.mesh();
   Renderer renderer(mesh, mesh.findField("f"), 32);
   renderer.setTransferFunction(transparent());
   const float targets[] = {0.55f, 0.57f, 0.59f};
@@ -135,14 +145,11 @@ TEST(Isosurface, TranslucentPlanesEachLieExactlyWhereTheFieldTakesTheirValue) {
       for (int y = 0; y < 32; ++y)
         for (int x = 0; x < 32; ++x) {
           const Ray ray = view.ray(x, y);
-          const float t = (targets[plane] - linear(ray.origin)) / dot(slope, ray.direction);
-          const Vec3f p = ray.at(t);
+          const float t = linear.along(ray, targets[plane]);
           const size_t i = size_t(y) * 32 + size_t(x);
-          // The field falls along these rays: the planes of higher value come first. All well inside the box.
-          const float tFirst = (targets[2] - linear(ray.origin)) / dot(slope, ray.direction);
-          const Vec3f first = ray.at(tFirst);
-          hits[i] = tFirst > 0.f && std::fabs(p.x) < 0.9f && std::fabs(p.y) < 0.9f && std::fabs(p.z) < 0.9f &&
-                    std::fabs(first.x) < 0.9f && std::fabs(first.y) < 0.9f && std::fabs(first.z) < 0.9f;
+          // The field falls along these rays: the planes of higher value come first.
+          const float tFirst = linear.along(ray, targets[2]);
+          hits[i] = tFirst > 0.f && wellInside(ray.at(t)) && wellInside(ray.at(tFirst));
           tested += hits[i];
           before[i] = hits[i] ? t * (1.f - 2e-5f) : 0.f;
           after[i] = hits[i] ? t * (1.f + 2e-5f) : 0.f;
