@@ -156,14 +156,6 @@ UVR_HOST_DEVICE inline void pixelsCovered(const Vec3f *corners, int count, const
   y1 = int(minf(floorf(yHigh + kMargin), float(camera.height - 1)));
 }
 
-/// Image coordinates (u, v) in [-1, 1] of the centre of pixel column x and row y.
-UVR_HOST_DEVICE inline float imageU(const CameraView &camera, int x) {
-  return 2.f * (float(x) + 0.5f) / float(camera.width) - 1.f;
-}
-UVR_HOST_DEVICE inline float imageV(const CameraView &camera, int y) {
-  return 1.f - 2.f * (float(y) + 0.5f) / float(camera.height);
-}
-
 /// Calls `visit(pixel, key)` for each pixel whose ray crosses triangle `corners` of boundary face `face` at
 /// t > 0 (`key` being crossingKey's; `inner` lies on the mesh's side of it): the pixels whose centres lie in
 /// the triangle's projected box, widened by a twentieth of a pixel for rounding and the edge tolerance (a
@@ -205,7 +197,7 @@ UVR_HOST_DEVICE void forEachTriangleCrossing(const Vec3f corners[3], Vec3f inner
   constexpr int kRowChunk = 64;
 #endif
   for (int y = y0; y <= y1; ++y) {
-    const float v = imageV(camera, y);
+    const float v = camera.imageV(y);
     const float detRow = det0 + v * detV, firstRow = first0 + v * firstV, secondRow = second0 + v * secondV;
     // On the host, the row's pixels are tested 64 at a time, with no branch, which leaves the loop to
     // vectorise: which pixels pass is unpredictable.
@@ -214,7 +206,7 @@ UVR_HOST_DEVICE void forEachTriangleCrossing(const Vec3f corners[3], Vec3f inner
       float dets[kRowChunk];
       bool hits[kRowChunk];
       for (int i = 0; i < count; ++i) {
-        const float u = imageU(camera, xs + i);
+        const float u = camera.imageU(xs + i);
         const float det = detRow + u * detU, a = firstRow + u * firstU, b = secondRow + u * secondU;
         const float slack = kEdgeTolerance * det;
         hits[i] = (det > 0.f) & (a >= -slack) & (b >= -slack) & (a + b <= det + slack);
@@ -224,7 +216,7 @@ UVR_HOST_DEVICE void forEachTriangleCrossing(const Vec3f corners[3], Vec3f inner
         if (!hits[i])
           continue;
         const int x = xs + i;
-        const float u = imageU(camera, x);
+        const float u = camera.imageU(x);
         const Vec3f direction = camera.forward + camera.right * u + camera.up * v;
         const float t = distance / dets[i] * sqrtf(dot(direction, direction));
         if (t > 0.f && t < INFINITY)
@@ -256,9 +248,9 @@ UVR_HOST_DEVICE void forEachQuadCrossing(const Vec3f corners[4], Vec3f inner, ui
   int x0, x1, y0, y1;
   pixelsCovered(corners, 4, camera, x0, x1, y0, y1);
   for (int y = y0; y <= y1; ++y) {
-    const float v = imageV(camera, y);
+    const float v = camera.imageV(y);
     for (int x = x0; x <= x1; ++x) {
-      const Vec3f d = camera.forward + camera.right * imageU(camera, x) + camera.up * v;
+      const Vec3f d = camera.forward + camera.right * camera.imageU(x) + camera.up * v;
       const float a = dot(cross(a00, d), e00), c = dot(qn, d);
       const float b = dot(cross(a10, d), e11) - (a + c);
       const float discriminant = b * b - 4.f * a * c;

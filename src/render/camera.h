@@ -20,10 +20,12 @@ struct CameraView {
   /// Null, or where each pixel's ray ends, row-major (FrameSettings::rayLimits); on the backend's side.
   const float *limits = nullptr;
 
+  /// Image coordinates in [-1, 1] of the centre of pixel column x and of pixel row y.
+  UVR_HOST_DEVICE float imageU(int x) const { return 2.f * (float(x) + 0.5f) / float(width) - 1.f; }
+  UVR_HOST_DEVICE float imageV(int y) const { return 1.f - 2.f * (float(y) + 0.5f) / float(height); }
+
   UVR_HOST_DEVICE Ray ray(int x, int y) const {
-    const float u = 2.f * (float(x) + 0.5f) / float(width) - 1.f;
-    const float v = 1.f - 2.f * (float(y) + 0.5f) / float(height);
-    Ray ray = makeRay(eye, normalize(forward + right * u + up * v));
+    Ray ray = makeRay(eye, normalize(forward + right * imageU(x) + up * imageV(y)));
     // Rays past the frame's edge (the CPU's look-ahead to the next row) have no limit of their own.
     if (limits && x >= 0 && x < width && y >= 0 && y < height)
       ray.tMax = limits[size_t(y) * size_t(width) + size_t(x)];
