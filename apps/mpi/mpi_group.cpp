@@ -76,7 +76,7 @@ std::vector<uint32_t> MpiGroup::sum(const std::vector<uint32_t> &values) {
   return total;
 }
 
-std::vector<int64_t> MpiGroup::allGather(const std::vector<int64_t> &values) {
+std::vector<std::vector<int64_t>> MpiGroup::allGather(const std::vector<int64_t> &values) {
   std::vector<int> counts(static_cast<size_t>(size_)), offsets(static_cast<size_t>(size_));
   const int count = int(values.size());
   MPI_Allgather(&count, 1, MPI_INT, counts.data(), 1, MPI_INT, MPI_COMM_WORLD);
@@ -88,7 +88,11 @@ std::vector<int64_t> MpiGroup::allGather(const std::vector<int64_t> &values) {
   std::vector<int64_t> all(static_cast<size_t>(total));
   MPI_Allgatherv(values.data(), count, MPI_INT64_T, all.data(), counts.data(), offsets.data(), MPI_INT64_T,
                  MPI_COMM_WORLD);
-  return all;
+  std::vector<std::vector<int64_t>> byRank(static_cast<size_t>(size_));
+  for (int r = 0; r < size_; ++r)
+    byRank[size_t(r)].assign(all.begin() + offsets[size_t(r)],
+                             all.begin() + offsets[size_t(r)] + counts[size_t(r)]);
+  return byRank;
 }
 
 namespace {

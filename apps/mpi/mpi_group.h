@@ -48,8 +48,8 @@ public:
   std::vector<double> gather(double value);
   /// The element-wise sums of every rank's `values` (all of one length), at rank 0 (empty elsewhere).
   std::vector<uint32_t> sum(const std::vector<uint32_t> &values);
-  /// Every rank's `values` (of any length), one after the other in rank order, on every rank.
-  std::vector<int64_t> allGather(const std::vector<int64_t> &values);
+  /// Every rank's `values` (of any length), by rank, on every rank.
+  std::vector<std::vector<int64_t>> allGather(const std::vector<int64_t> &values);
 
   /// Composites every rank's premultiplied RGBA image (`width` x `height`, 4 floats a pixel) front to back
   /// in `order` (ranks, front first) by direct send: each rank composites a band of rows from every rank's

@@ -199,17 +199,13 @@ std::optional<PartitionedFile> piecesForRanks(const RenderOptions &o, int ranks,
 /// Every rank's share of the whole mesh's step scales, on every rank.
 std::vector<VolumeMesh::StepScaleShare> gatherShares(MpiGroup &group,
                                                      const VolumeMesh::StepScaleShare &mine) {
+  // Each rank's sums, then its counts: one collective.
   std::vector<int64_t> packed(mine.sizeLog2Sums);
   packed.insert(packed.end(), mine.cellCounts.begin(), mine.cellCounts.end());
-  const std::vector<int64_t> all = group.allGather(packed);
-  const std::vector<int64_t> lengths = group.allGather({int64_t(mine.cellCounts.size())});
-  std::vector<VolumeMesh::StepScaleShare> shares(lengths.size());
-  auto at = all.begin();
-  for (size_t r = 0; r < shares.size(); ++r) {
-    const ptrdiff_t n = ptrdiff_t(lengths[r]);
-    shares[r].sizeLog2Sums.assign(at, at + n);
-    shares[r].cellCounts.assign(at + n, at + 2 * n);
-    at += 2 * n;
+  std::vector<VolumeMesh::StepScaleShare> shares;
+  for (const std::vector<int64_t> &theirs : group.allGather(packed)) {
+    const auto half = theirs.begin() + ptrdiff_t(theirs.size() / 2);
+    shares.push_back({{theirs.begin(), half}, {half, theirs.end()}});
   }
   return shares;
 }
