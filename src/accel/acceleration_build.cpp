@@ -27,8 +27,7 @@ HostAcceleration buildHostAcceleration(const Mesh &mesh, const MeshView &view, u
   if (lean)
     return built;
   built.tetNeighbors = buildTetNeighbors(mesh);
-  const uint64_t otherCells = view.cellCount() - view.tetCount;
-  if (walkAidFits(cellAdjacencyBytes(otherCells))) {
+  if (walkAidFits(cellAdjacencyBytes(view))) {
     built.cellNeighbors = buildCellNeighbors(mesh);
     built.cellFacePlanes = buildCellFacePlanes(view);
   }

@@ -43,12 +43,14 @@ struct HostSampling {
 
 /// The cell a ray's last sample lies in. For a tet, also the sample's barycentric weights and field with
 /// their change per unit t along the ray: the next sample, a step on, is tested against the tet with a few
-/// multiply-adds and no loads, and where it lies beyond, its weights name the face to walk across.
+/// multiply-adds and no loads, and where it lies beyond, its weights name the face to walk across. For
+/// another cell, its parametric coordinates and their change: the next sample's solve there starts from them.
 struct RayCell {
   uint32_t cell = kNoCell;
-  bool onRay = false;  ///< whether the ray passes through `cell`: where not, `cell` is a guess near it
-  bool affine = false; ///< whether the members below describe `cell` (a tet) on this ray
-  float t = 0.f;       ///< where they were evaluated
+  bool onRay = false;      ///< whether the ray passes through `cell`: where not, `cell` is a guess near it
+  bool affine = false;     ///< whether the members below describe `cell` (a tet) on this ray
+  bool parametric = false; ///< whether w[0..2] and dw[0..2] hold `cell`'s parametric coordinates and rate
+  float t = 0.f;           ///< where they were evaluated
   float w[4], dw[4];
   float value, dvalue;
 
@@ -57,6 +59,7 @@ struct RayCell {
     cell = to;
     onRay = true;
     affine = false;
+    parametric = false;
   }
   /// Where `affine`: the weights in `cell` of the point at `tNext` on the ray, and the face it lies furthest
   /// beyond (see smallestWeight), with its weight in `lowest`.
@@ -193,6 +196,7 @@ UVR_HOST_DEVICE UVR_HOST_INLINE bool walkTets(const VolumeView &volume, const Ra
       at.cell = current;
       at.onRay = true;
       at.affine = true;
+      at.parametric = false;
       at.t = t;
       for (int i = 0; i < 4; ++i) {
         at.w[i] = w[i];
@@ -211,25 +215,63 @@ UVR_HOST_DEVICE UVR_HOST_INLINE bool walkTets(const VolumeView &volume, const Ra
   return false;
 }
 
-/// Steps through cells other than tets towards the sample at `t` on `ray`, from `start` across the face whose
-/// plane the sample lies furthest beyond, testing a cell (a Newton solve) only where the sample lies within
-/// about all its faces' planes; a tet on the way hands over to walkTets. Gives up after `maxSteps` cells.
+/// Steps through cells other than tets towards the sample at `t` on `ray`, from `start`; a tet on the way
+/// hands over to walkTets. A hexahedron is solved for the sample's parametric coordinates, which name the
+/// face to cross where it lies outside. Another cell is solved only where the sample lies within about all
+/// its faces' planes, else left across the face whose plane it lies furthest beyond. Gives up after
+/// `maxSteps` cells.
+/// How far beyond a hexahedron's face, in parametric units, a walk takes the last sample's coordinates
+/// carried along the ray at their word: their error grows with the square of the distance, and a cell's
+/// distortion.
+constexpr float kHexLeaveUnsolved = 0.25f;
+
 template <class Sampling>
 UVR_HOST_DEVICE inline bool walkCells(const VolumeView &volume, const Ray &ray, float t, uint32_t start,
                                       int maxSteps, RayCell &at, float &value) {
   const MeshView &mesh = volume.mesh;
   const Vec3f p = ray.at(t);
+  const uint64_t firstHex = mesh.tetCount + mesh.pyramidCount + mesh.wedgeCount;
   uint32_t current = start;
   for (int step = 0; step < maxSteps && current != kNoCell; ++step) {
     if (current < mesh.tetCount)
       return volume.tetNeighbors &&
              walkTets<Sampling>(volume, ray, t, current, false, maxSteps - step, at, value);
     const uint64_t other = uint64_t(current) - mesh.tetCount;
+    RaySolve along;
+    along.direction = ray.direction;
+    if ((along.warm = at.parametric && at.cell == current))
+      along.start = Vec3f{at.w[0], at.w[1], at.w[2]} + Vec3f{at.dw[0], at.dw[1], at.dw[2]} * (t - at.t);
+    bool inside = false;
+    int face;
     float beyond;
-    const int face = furthestFace(volume.cellFacePlanes, other, p, beyond);
-    // Faces of distorted cells are not planar: near their planes, the cell's own test decides.
-    if (beyond <= 0.25f && sampleCell(mesh, current, p, value)) {
+    if (current >= firstHex) {
+      // Where the last sample's coordinates, carried along the ray, lie well beyond a face, so does this
+      // sample: no solve is needed to leave.
+      face = hexFaceBeyond(along.start, beyond);
+      if (!along.warm || beyond <= kHexLeaveUnsolved) {
+        const uint32_t *v = mesh.hexes + 8 * (current - firstHex);
+        Vec3f r;
+        inside = parametricCoordinates<8>(mesh.points, v, p, r, &along) && insideReference(r, 8);
+        if (inside)
+          value = interpolateIsoparametric<8>(mesh, v, current, r);
+        along.start = r;
+        face = hexFaceBeyond(r, beyond);
+      }
+    } else {
+      face = furthestFace(volume.cellFacePlanes, other, p, beyond);
+      // Faces of distorted cells are not planar: near their planes, the cell's own test decides.
+      if (beyond <= 0.25f)
+        inside = other < mesh.pyramidCount
+                     ? sampleIsoparametric<5>(mesh, mesh.pyramids + 5 * other, current, p, value, &along)
+                     : sampleIsoparametric<6>(mesh, mesh.wedges + 6 * (other - mesh.pyramidCount), current, p,
+                                              value, &along);
+    }
+    if (inside) {
       at.enter(current);
+      at.parametric = true;
+      at.t = t;
+      at.w[0] = along.start.x, at.w[1] = along.start.y, at.w[2] = along.start.z;
+      at.dw[0] = along.rate.x, at.dw[1] = along.rate.y, at.dw[2] = along.rate.z;
       return true;
     }
     current = volume.cellNeighbors[kMaxCellFaces * other + uint64_t(face)];
@@ -265,7 +307,7 @@ UVR_HOST_DEVICE UVR_HOST_INLINE bool locateSample(const VolumeView &volume, bool
     if (volume.tetNeighbors && start < volume.mesh.tetCount)
       return walkTets<Sampling>(volume, ray, t, start, start == at.cell && at.onRay, steps, at, value);
     if constexpr (Sampling::kCellWalks) {
-      if (volume.cellNeighbors && volume.cellFacePlanes && start >= volume.mesh.tetCount)
+      if (volume.cellNeighbors && start >= volume.mesh.tetCount)
         return walkCells<Sampling>(volume, ray, t, start, steps, at, value);
     }
     if (!sampleCell(volume.mesh, start, p, value))

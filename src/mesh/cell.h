@@ -147,11 +147,25 @@ UVR_HOST_DEVICE inline bool insideReference(Vec3f r, int n) {
   return n == 6 ? inCube && r.x + r.y <= hi : inCube;
 }
 
+/// What a walk along a ray adds to a solve (parametricCoordinates). Samples lie about half a cell apart, so
+/// a cell mostly holds the next sample too, whose solve then starts from this one's coordinates carried
+/// along the ray by their rate, a fraction of a Newton step from its root. And a point outside the cell
+/// still gets coordinates: they say which face it lies beyond.
+struct RaySolve {
+  Vec3f direction;   ///< the ray's
+  Vec3f start;       ///< where `warm`, the iteration's start
+  Vec3f rate;        ///< out: the root's change per unit step along `direction`
+  bool warm = false; ///< else the iteration starts at the reference cell's centre
+};
+
 /// Inverts x(r) = sum_i N_i(r) p_i by Newton's method: the parametric coordinates `r` of `p`; false where `p`
 /// lies outside the cell's box, the iteration runs far outside the reference cell or does not converge, or
-/// the cell is degenerate. The caller tells inside from outside (insideReference).
+/// the cell is degenerate. The caller tells inside from outside (insideReference). `along`, where given,
+/// gives the start and takes the rate (RaySolve); where `p` lies outside the box or the iteration fails, `r`
+/// is then the last iterate (one step, outside the box), which says which way `p` lies.
 template <int N>
-UVR_HOST_DEVICE inline bool parametricCoordinates(const Vec3f *points, const uint32_t *v, Vec3f p, Vec3f &r) {
+UVR_HOST_DEVICE inline bool parametricCoordinates(const Vec3f *points, const uint32_t *v, Vec3f p, Vec3f &r,
+                                                  RaySolve *along = nullptr) {
   Vec3f corner[N];
   Vec3f lower = points[v[0]], upper = points[v[0]];
   for (int i = 0; i < N; ++i) {
@@ -164,8 +178,9 @@ UVR_HOST_DEVICE inline bool parametricCoordinates(const Vec3f *points, const uin
   if (!(scale > 0.f))
     return false;
   const float slack = scale * kInsideTolerance;
-  if (p.x < lower.x - slack || p.y < lower.y - slack || p.z < lower.z - slack || p.x > upper.x + slack ||
-      p.y > upper.y + slack || p.z > upper.z + slack)
+  const bool outsideBox = p.x < lower.x - slack || p.y < lower.y - slack || p.z < lower.z - slack ||
+                          p.x > upper.x + slack || p.y > upper.y + slack || p.z > upper.z + slack;
+  if (outsideBox && !along)
     return false;
   // About the first corner: far from the origin, absolute coordinates would leave the residual's rounding
   // above the tolerance below, and the iteration would never see it converge.
@@ -186,10 +201,16 @@ UVR_HOST_DEVICE inline bool parametricCoordinates(const Vec3f *points, const uin
   }
   // Inside all three reference cells, away from the pyramid's apex; a hexahedron's centre, from which a
   // damped step reaches any point of the cube.
-  r = N == 8 ? Vec3f{0.5f, 0.5f, 0.5f} : Vec3f{1.f / 3.f, 1.f / 3.f, 0.5f};
+  r = along && along->warm ? along->start
+      : N == 8             ? Vec3f{0.5f, 0.5f, 0.5f}
+                           : Vec3f{1.f / 3.f, 1.f / 3.f, 0.5f};
   bool converged = false;
-  for (int iteration = 0; iteration < 16; ++iteration) {
-    Vec3f residual, dr, ds, dt;
+  Vec3f dr, ds, dt; // the Jacobian's columns, at the last iterate
+  // Outside the box, one step tells a walk which way the point lies.
+  const int iterations = outsideBox ? 1 : 16;
+  for (int iteration = 0; iteration < iterations; ++iteration) {
+    Vec3f residual;
+    dr = ds = dt = Vec3f{};
     if constexpr (N == 8) {
       const float u = r.x, v = r.y, w = r.z;
       residual = b * u + c * v + d * w + e * (u * v) + f * (v * w) + g * (u * w) + h * (u * v * w) - p;
@@ -218,11 +239,18 @@ UVR_HOST_DEVICE inline bool parametricCoordinates(const Vec3f *points, const uin
       return false;
     const float inv = 1.f / det;
     Vec3f delta{det3(residual, ds, dt) * inv, det3(dr, residual, dt) * inv, det3(dr, ds, residual) * inv};
-    // Damped: on strongly distorted cells a full step from the centre can overshoot into another root.
+    // Damped: on strongly distorted cells a full step from the centre can overshoot into another root. Not
+    // the step that says which way a point outside the box lies.
     const float largest = maxf(fabsf(delta.x), maxf(fabsf(delta.y), fabsf(delta.z)));
-    if (largest > 0.5f)
+    if (largest > 0.5f && !outsideBox)
       delta = delta * (0.5f / largest);
     r = r - delta;
+    // Converging quadratically, a step this short leaves an error of about its square: a further residual
+    // would only confirm it.
+    if (largest <= 1e-4f) {
+      converged = true;
+      break;
+    }
     // Far outside after a few steps: no need to converge to say no.
     if (iteration >= 3 && (fabsf(r.x - 0.5f) > 2.f || fabsf(r.y - 0.5f) > 2.f || fabsf(r.z - 0.5f) > 2.f))
       return false;
@@ -231,6 +259,12 @@ UVR_HOST_DEVICE inline bool parametricCoordinates(const Vec3f *points, const uin
   if (N == 5 && r.z >= 1.f - 1e-4f && r.z <= 1.f + kInsideTolerance) {
     r.x = clampf(r.x, 0.f, 1.f);
     r.y = clampf(r.y, 0.f, 1.f);
+  }
+  if (along && converged) {
+    const float det = det3(dr, ds, dt);
+    const Vec3f d = along->direction;
+    along->rate =
+        det != 0.f ? Vec3f{det3(d, ds, dt), det3(dr, d, dt), det3(dr, ds, d)} * (1.f / det) : Vec3f{};
   }
   // Unconverged, r says nothing of where `p` lies: near a distorted cell the damped steps can stall inside
   // the reference cell with `p` outside.
@@ -259,22 +293,50 @@ UVR_HOST_DEVICE inline CellType cellType(const MeshView &mesh, uint64_t cell) {
   return cell < mesh.wedgeCount ? CellType::Wedge : CellType::Hexahedron;
 }
 
+/// The field at parametric coordinates `r` of `cell`, whose corners are `v`.
 template <int N>
-UVR_HOST_DEVICE inline bool sampleIsoparametric(const MeshView &mesh, const uint32_t *v, uint64_t cell,
-                                                Vec3f p, float &value) {
-  Vec3f r;
-  if (!parametricCoordinates<N>(mesh.points, v, p, r) || !insideReference(r, N))
-    return false;
-  if (mesh.cellCentered) {
-    value = mesh.values[cell];
-    return true;
-  }
+UVR_HOST_DEVICE inline float interpolateIsoparametric(const MeshView &mesh, const uint32_t *v, uint64_t cell,
+                                                      Vec3f r) {
+  if (mesh.cellCentered)
+    return mesh.values[cell];
   ShapeFunctions<N> s;
   evaluateShape(r, s);
-  value = 0.f;
+  float value = 0.f;
   for (int i = 0; i < N; ++i)
     value += s.value[i] * mesh.values[v[i]];
+  return value;
+}
+
+/// The field at `p` if `p` lies in the cell of corners `v`; `along` as parametricCoordinates takes it, its
+/// `start` left at the coordinates found.
+template <int N>
+UVR_HOST_DEVICE inline bool sampleIsoparametric(const MeshView &mesh, const uint32_t *v, uint64_t cell,
+                                                Vec3f p, float &value, RaySolve *along = nullptr) {
+  Vec3f r;
+  const bool solved = parametricCoordinates<N>(mesh.points, v, p, r, along);
+  if (along)
+    along->start = r;
+  if (!solved || !insideReference(r, N))
+    return false;
+  value = interpolateIsoparametric<N>(mesh, v, cell, r);
   return true;
+}
+
+/// The face of a hexahedron (cellFaces' order) that a point of parametric coordinates `r` lies furthest
+/// beyond, and how far in `most` (negative inside).
+UVR_HOST_DEVICE inline int hexFaceBeyond(Vec3f r, float &most) {
+  int face = 0;
+  most = -r.x;
+  const auto consider = [&](float beyond, int f) {
+    face = beyond > most ? f : face;
+    most = maxf(beyond, most);
+  };
+  consider(r.x - 1.f, 1);
+  consider(-r.y, 2);
+  consider(r.y - 1.f, 3);
+  consider(-r.z, 4);
+  consider(r.z - 1.f, 5);
+  return face;
 }
 
 /// The field at `p` if `p` lies in `cell`: interpolated for point data, the cell's own value for cell data.

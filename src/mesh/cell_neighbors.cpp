@@ -25,8 +25,10 @@ struct FaceKey {
 
 } // namespace
 
-uint64_t cellAdjacencyBytes(uint64_t otherCells) {
-  return otherCells * kMaxCellFaces * (sizeof(uint32_t) + sizeof(Vec4f) + sizeof(FaceKey));
+uint64_t cellAdjacencyBytes(const MeshView &mesh) {
+  const uint64_t otherCells = mesh.cellCount() - mesh.tetCount;
+  return kMaxCellFaces * (otherCells * (sizeof(uint32_t) + sizeof(FaceKey)) +
+                          (mesh.pyramidCount + mesh.wedgeCount) * sizeof(Vec4f));
 }
 
 std::vector<uint32_t> buildCellNeighbors(const Mesh &cells) {
@@ -132,9 +134,9 @@ std::vector<uint32_t> listBoundaryCellFaces(const MeshView &mesh, const uint32_t
 }
 
 std::vector<Vec4f> buildCellFacePlanes(const MeshView &mesh) {
-  const uint64_t otherCells = mesh.cellCount() - mesh.tetCount;
-  std::vector<Vec4f> planes(kMaxCellFaces * otherCells, Vec4f{0.f, 0.f, 0.f, -INFINITY});
-  tbb::parallel_for(mesh.tetCount, mesh.cellCount(), [&](uint64_t cell) {
+  const uint64_t firstHex = mesh.tetCount + mesh.pyramidCount + mesh.wedgeCount;
+  std::vector<Vec4f> planes(kMaxCellFaces * (firstHex - mesh.tetCount), Vec4f{0.f, 0.f, 0.f, -INFINITY});
+  tbb::parallel_for(mesh.tetCount, firstHex, [&](uint64_t cell) {
     int n;
     const uint32_t *v = cellCorners(mesh, cell, n);
     const CellFaces faces = cellFaces(cellType(mesh, cell));

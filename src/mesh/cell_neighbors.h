@@ -84,14 +84,17 @@ std::vector<uint32_t> listBoundaryCellFaces(const MeshView &mesh, const uint32_t
 /// mesh of tets alone.
 std::vector<uint32_t> buildCellNeighbors(const Mesh &mesh);
 
-/// The most memory buildCellNeighbors and buildCellFacePlanes take together for `otherCells` cells that are
-/// not tets: what they keep (120 bytes a cell) and the face keys the adjacency is sorted from.
-uint64_t cellAdjacencyBytes(uint64_t otherCells);
+/// The most memory buildCellNeighbors and buildCellFacePlanes take together for `mesh`: what they keep (24
+/// bytes a cell that is not a tet, 96 more a pyramid or wedge) and the face keys the adjacency is sorted
+/// from.
+uint64_t cellAdjacencyBytes(const MeshView &mesh);
 
-/// Per cell that is not a tet, its faces' planes (cellFaces' order) as (n, w): n·p + w is how far `p` lies
-/// beyond the face, in units of the cell's size (its centre's distance to its first corner). A quad's plane
-/// is taken through its centre, normal to its diagonals' cross product; each normal is turned away from the
-/// cell's centre, so any winding works. kMaxCellFaces entries per cell, a missing face never furthest.
+/// Per pyramid and wedge, its faces' planes (cellFaces' order) as (n, w): n·p + w is how far `p` lies beyond
+/// the face, in units of the cell's size (its centre's distance to its first corner). A quad's plane is
+/// taken through its centre, normal to its diagonals' cross product; each normal is turned away from the
+/// cell's centre, so any winding works. kMaxCellFaces entries per cell, at kMaxCellFaces * (cell - tet
+/// count), a missing face never furthest. Hexahedra have none: a walk crosses them by their parametric
+/// coordinates (walkCells).
 std::vector<Vec4f> buildCellFacePlanes(const MeshView &mesh);
 
 /// The face of the `index`-th cell that is not a tet whose plane `p` lies furthest beyond, and how far.

@@ -253,7 +253,7 @@ CudaBackend::CudaBackend(const Mesh &hostMesh, const MeshView &mesh, uint32_t le
     copyMember(tetNeighbors, d.accel.tetNeighbors);
     copyMember(d.accel.boundaryFaceList,
                listBoundaryCellFaces(mesh, dataOrNull(tetNeighbors), cellNeighbors));
-    if (cellAdjacencyBytes(otherCells) <= freeBytes / 8) {
+    if (cellAdjacencyBytes(mesh) <= freeBytes / 8) {
       copyMember(d.accel.cellNeighbors, cellNeighbors);
       copyMember(d.accel.cellFacePlanes, buildCellFacePlanes(mesh));
     }
