@@ -267,6 +267,7 @@ def main():
             vtk_out = os.path.join(args.outdir, "vtk")
             vtk_command = [sys.executable, os.path.join(ub.REPO, "bench", "vtk_compare.py"), uvr, vtk_out,
                            "--cases", args.cases, "--data", args.data] + (["--quick"] if args.quick else [])
+            vtk_command += (["--only", *args.only] if args.only else []) + (["--size", args.size] if args.size else [])
             if not os.environ.get("DISPLAY") and shutil.which("xvfb-run"):
                 vtk_command = ["xvfb-run", "-a"] + vtk_command
             subprocess.run(vtk_command, check=True)

@@ -96,6 +96,24 @@ def build_transfer_functions(vtk, preset, low, high):
     return dense_color, attenuation
 
 
+def vtk_scalars(vtk, grid, field):
+    """The name of the array VTK is to render for uvr's `field` (from `uvr info`): the array of that name and
+    centring (a "point:" or "cell:" prefix is uvr's, not the file's), or, for an array of several components
+    (OpenFOAM's U), a new array of its magnitudes at the same points or cells, as uvr renders it."""
+    data = grid.GetCellData() if field["centering"] == "cell" else grid.GetPointData()
+    source = data.GetArray(field["name"])
+    if source is None:
+        sys.exit(f"VTK: no {field['centering']} array {field['name']!r}")
+    if source.GetNumberOfComponents() == 1:
+        return field["name"]
+    from vtk.util.numpy_support import numpy_to_vtk, vtk_to_numpy
+    import numpy
+    magnitude = numpy_to_vtk(numpy.linalg.norm(vtk_to_numpy(source).astype(numpy.float64), axis=1), deep=True)
+    magnitude.SetName(field["name"] + "_magnitude")
+    data.AddArray(magnitude)
+    return magnitude.GetName()
+
+
 def render_vtk(vtk, mesh, case, field, camera, unit, size, frames, png, pixel_shift=(0.0, 0.0)):
     """Renders `frames` frames; returns (first frame ms, later frames ms list, threads)."""
     from vtk.util.numpy_support import vtk_to_numpy
@@ -105,6 +123,7 @@ def render_vtk(vtk, mesh, case, field, camera, unit, size, frames, png, pixel_sh
     reader.SetFileName(mesh)
     reader.Update()
     grid = reader.GetOutput()
+    array = vtk_scalars(vtk, grid, field)
     types = vtk.vtkCellTypes()
     grid.GetCellTypes(types)
     if types.GetNumberOfTypes() != 1 or types.GetCellType(0) != vtk.VTK_TETRA:
@@ -120,7 +139,7 @@ def render_vtk(vtk, mesh, case, field, camera, unit, size, frames, png, pixel_sh
         mapper.SetScalarModeToUseCellFieldData()
     else:
         mapper.SetScalarModeToUsePointFieldData()
-    mapper.SelectScalarArray(case["field"])
+    mapper.SelectScalarArray(array)
     mapper.SetAutoAdjustSampleDistances(0)  # else VTK lowers the resolution to meet a frame-time target
     mapper.SetImageSampleDistance(1.0)
 
