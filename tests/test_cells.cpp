@@ -203,6 +203,7 @@ TEST(ParametricCoordinates, WarmStartsReachTheColdRootAndTheRateFollowsTheRay) {
         q = q + view.points[v[k]] * s.value[k];
       RaySolve walk;
       walk.direction = direction;
+      walk.anywhere = true;
       Vec3f r;
       parametricCoordinates<8>(view.points, v, q, r, &walk);
       float most;

@@ -221,9 +221,9 @@ UVR_HOST_DEVICE UVR_HOST_INLINE bool walkTets(const VolumeView &volume, const Ra
 /// its faces' planes, else left across the face whose plane it lies furthest beyond. Gives up after
 /// `maxSteps` cells.
 /// How far beyond a hexahedron's face, in parametric units, a walk takes the last sample's coordinates
-/// carried along the ray at their word: their error grows with the square of the distance, and a cell's
-/// distortion.
-constexpr float kHexLeaveUnsolved = 0.25f;
+/// carried along the ray at their word: their error grows with the square of the distance and with the
+/// cell's distortion; a wrong guess costs a step back.
+constexpr float kHexLeaveUnsolved = 0.01f;
 
 template <class Sampling>
 UVR_HOST_DEVICE inline bool walkCells(const VolumeView &volume, const Ray &ray, float t, uint32_t start,
@@ -245,10 +245,11 @@ UVR_HOST_DEVICE inline bool walkCells(const VolumeView &volume, const Ray &ray, 
     int face;
     float beyond;
     if (current >= firstHex) {
-      // Where the last sample's coordinates, carried along the ray, lie well beyond a face, so does this
-      // sample: no solve is needed to leave.
+      // Where the last sample's coordinates, carried along the ray, lie beyond a face, this sample most
+      // likely does too: the walk leaves without a solve, and on its way back, should it come back, solves.
       face = hexFaceBeyond(along.start, beyond);
-      if (!along.warm || beyond <= kHexLeaveUnsolved) {
+      if (!along.warm || step > 0 || beyond <= kHexLeaveUnsolved) {
+        along.anywhere = true;
         const uint32_t *v = mesh.hexes + 8 * (current - firstHex);
         Vec3f r;
         inside = parametricCoordinates<8>(mesh.points, v, p, r, &along) && insideReference(r, 8);

@@ -150,19 +150,21 @@ UVR_HOST_DEVICE inline bool insideReference(Vec3f r, int n) {
 /// What a walk along a ray adds to a solve (parametricCoordinates). Samples lie about half a cell apart, so
 /// a cell mostly holds the next sample too, whose solve then starts from this one's coordinates carried
 /// along the ray by their rate, a fraction of a Newton step from its root. And a point outside the cell
-/// still gets coordinates: they say which face it lies beyond.
+/// still gets coordinates where the walk asks: they say which face it lies beyond.
 struct RaySolve {
-  Vec3f direction;   ///< the ray's
-  Vec3f start;       ///< where `warm`, the iteration's start
-  Vec3f rate;        ///< out: the root's change per unit step along `direction`
-  bool warm = false; ///< else the iteration starts at the reference cell's centre
+  Vec3f direction;       ///< the ray's
+  Vec3f start;           ///< where `warm`, the iteration's start
+  Vec3f rate;            ///< out: the root's change per unit step along `direction`
+  bool warm = false;     ///< else the iteration starts at the reference cell's centre
+  bool anywhere = false; ///< coordinates wanted for a point outside the cell's box too
 };
 
 /// Inverts x(r) = sum_i N_i(r) p_i by Newton's method: the parametric coordinates `r` of `p`; false where `p`
 /// lies outside the cell's box, the iteration runs far outside the reference cell or does not converge, or
 /// the cell is degenerate. The caller tells inside from outside (insideReference). `along`, where given,
-/// gives the start and takes the rate (RaySolve); where `p` lies outside the box or the iteration fails, `r`
-/// is then the last iterate (one step, outside the box), which says which way `p` lies.
+/// gives the start and takes the rate (RaySolve); where it asks for coordinates `anywhere`, the box is not a
+/// reason to stop, and where `p` lies outside it or the iteration fails, `r` is the last iterate (one step,
+/// outside the box), which says which way `p` lies.
 template <int N>
 UVR_HOST_DEVICE inline bool parametricCoordinates(const Vec3f *points, const uint32_t *v, Vec3f p, Vec3f &r,
                                                   RaySolve *along = nullptr) {
@@ -180,7 +182,7 @@ UVR_HOST_DEVICE inline bool parametricCoordinates(const Vec3f *points, const uin
   const float slack = scale * kInsideTolerance;
   const bool outsideBox = p.x < lower.x - slack || p.y < lower.y - slack || p.z < lower.z - slack ||
                           p.x > upper.x + slack || p.y > upper.y + slack || p.z > upper.z + slack;
-  if (outsideBox && !along)
+  if (outsideBox && !(along && along->anywhere))
     return false;
   // About the first corner: far from the origin, absolute coordinates would leave the residual's rounding
   // above the tolerance below, and the iteration would never see it converge.
