@@ -40,6 +40,19 @@ def cube(n, poly):
     return points, cells, types, faces
 
 
+def linear(point):
+    """The point field p."""
+    x, y, z = point
+    return x + 2 * y + 3 * z
+
+
+def cell_p(grid):
+    """The cell field p: the point field p at each cell's centre, as a finite-volume result's cell mean (a
+    polyhedron's centre point takes it)."""
+    points, cells = grid[0], grid[1]
+    return [linear([sum(points[i][k] for i in c) / len(c) for k in range(3)]) for c in cells]
+
+
 def stream(faces):
     s = [len(faces)]
     for f in faces:
@@ -59,9 +72,8 @@ def write_vtu(path, grid):
         if t == 42:
             face_stream += stream(f)
         face_offsets.append(len(face_stream) if t == 42 else -1)
-    # A point field p (linear) and a cell field p (the cell's index mod 3).
-    p_point = [x + 2 * y + 3 * z for x, y, z in points]
-    p_cell = [c % 3 for c in range(len(cells))]
+    p_point = [linear(p) for p in points]
+    p_cell = cell_p(grid)
     arrays = (f'<DataArray type="Int64" Name="faces" format="ascii">{text(face_stream)}</DataArray>\n'
               f'<DataArray type="Int64" Name="faceoffsets" format="ascii">{text(face_offsets)}</DataArray>\n'
               if 42 in types else "")
@@ -92,9 +104,9 @@ def write_vtk(path, grid):
     lines += [" ".join(str(v) for v in [len(e)] + e) for e in entries]
     lines += [f"CELL_TYPES {len(types)}"] + [str(t) for t in types]
     lines += [f"CELL_DATA {len(cells)}", "SCALARS p float", "LOOKUP_TABLE default"]
-    lines += [str(c % 3) for c in range(len(cells))]
+    lines += [str(v) for v in cell_p(grid)]
     lines += [f"POINT_DATA {len(points)}", "SCALARS p float", "LOOKUP_TABLE default"]
-    lines += [str(x + 2 * y + 3 * z) for x, y, z in points]
+    lines += [str(linear(p)) for p in points]
     with open(path, "w") as out:
         out.write("\n".join(lines) + "\n")
 

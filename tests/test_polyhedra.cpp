@@ -13,6 +13,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdlib>
@@ -429,6 +430,88 @@ TEST_F(Polyhedra, PentagonalPrismAndWedgeRenderAsWedges) {
   }
 }
 
+/// `text` with the last `from` replaced by `to`.
+std::string replacedLast(std::string text, const std::string &from, const std::string &to) {
+  const size_t at = text.rfind(from);
+  EXPECT_NE(at, std::string::npos) << from;
+  return at == std::string::npos ? text : text.replace(at, from.size(), to);
+}
+
+/// `text` with every `from` replaced by `to`.
+std::string replacedAll(std::string text, const std::string &from, const std::string &to) {
+  for (size_t at = text.find(from); at != std::string::npos; at = text.find(from, at + to.size()))
+    text.replace(at, from.size(), to);
+  return text;
+}
+
+TEST_F(Polyhedra, CentresTakeTheCellFieldOfTheirName) {
+  // The prism and wedge as polyhedra, with point fields p (a cell field p too), U (3 components at points
+  // and at cells), q (no cell field) and r (a cell field r of 2 components).
+  TestGrid grid = prismGrid(true);
+  const std::vector<float> f = grid.pointFields[0].second;
+  std::vector<float> u;
+  for (float v : f)
+    u.insert(u.end(), {v, 0.f, 0.f});
+  grid.pointFields = {{"p", f}, {"U", u}, {"q", f}, {"r", f}};
+  grid.cellFields = {
+      {"p", {50.f, 60.f}}, {"U", {3.f, 4.f, 0.f, 0.f, 0.f, -12.f}}, {"r", {1.f, 1.f, 2.f, 2.f}}};
+  const float cellP[] = {50.f, 60.f}, cellU[] = {5.f, 12.f};
+  auto vtu = [&](VtuFaces layout) {
+    const std::string text =
+        replacedAll(vtuText(grid, layout), "Name=\"U\"", "Name=\"U\" NumberOfComponents=\"3\"");
+    return replacedLast(text, "Name=\"r\"", "Name=\"r\" NumberOfComponents=\"2\"");
+  };
+  auto vtk = [&](bool version51) {
+    const std::string text =
+        replacedAll(vtkText(grid, version51), "SCALARS U float\n", "SCALARS U float 3\n");
+    return replacedLast(text, "SCALARS r float\n", "SCALARS r float 2\n");
+  };
+  // Each polyhedron's centre: the average of its distinct points.
+  std::vector<Vec3f> centres;
+  for (const auto &cell : grid.cells) {
+    Vec3f sum{0.f, 0.f, 0.f};
+    for (int64_t id : cell)
+      sum = sum + grid.points[size_t(id)];
+    centres.push_back(sum * (1.f / float(cell.size())));
+  }
+  for (const auto &[name, text] :
+       std::vector<std::pair<std::string, std::string>>{{"poly.vtu", vtu(VtuFaces::Stream)},
+                                                        {"poly94.vtu", vtu(VtuFaces::Vtk94)},
+                                                        {"poly42.vtk", vtk(false)},
+                                                        {"poly51.vtk", vtk(true)}}) {
+    SCOPED_TRACE(name);
+    const VolumeMesh mesh = VolumeMesh::load(write(name, text));
+    const auto points = mesh.points();
+    ASSERT_EQ(points.size(), grid.points.size() + 2);
+    const auto values = [&](const std::string &field) {
+      const int index = mesh.findField(field);
+      EXPECT_GE(index, 0) << field;
+      EXPECT_EQ(mesh.field(index).centering, Centering::Point) << field;
+      return mesh.fieldValues(index);
+    };
+    const auto p = values("point:p"), U = values("point:U"), q = values("point:q"), r = values("point:r");
+    int found = 0;
+    for (size_t i = 0; i < points.size(); ++i) {
+      const float linear = linearField(points[i]);
+      const auto centre = std::find_if(centres.begin(), centres.end(),
+                                       [&](Vec3f c) { return length(points[i] - c) <= 1e-5f; });
+      if (centre == centres.end()) {
+        EXPECT_NEAR(p[i], linear, 1e-5f);
+        EXPECT_NEAR(U[i], std::abs(linear), 1e-5f);
+        continue;
+      }
+      const size_t k = size_t(centre - centres.begin());
+      ++found;
+      EXPECT_EQ(p[i], cellP[k]) << "centre " << k;
+      EXPECT_FLOAT_EQ(U[i], cellU[k]) << "centre " << k; // the magnitude of the cell's vector
+      // The corners' average: exact for a linear field at the corners' centre.
+      EXPECT_NEAR(q[i], linear, 1e-5f) << "centre " << k;
+      EXPECT_NEAR(r[i], linear, 1e-5f) << "centre " << k;
+    }
+    EXPECT_EQ(found, 2);
+  }
+}
+
 TEST_F(Polyhedra, InfoCountsSurviveSeriesAndLegacyTogether) {
   // A .pvd of two parts: one polyhedral .vtu and one legacy file.
   write("a.vtu", vtuText(prismGrid(true)));
@@ -488,7 +571,8 @@ TEST_F(Polyhedra, MalformedPolyhedraAreRefused) {
 
 #if UVR_HAVE_NETCDF
 /// Exodus II NFACED: a hexahedron and a pentagonal prism beside it (a house's shape, extruded) as polyhedra
-/// over one NSIDED face block, the square between them shared; a nodal and an element variable.
+/// over one NSIDED face block, the square between them shared; nodal and element variables t and u, u
+/// without values in the block (NaN there).
 const char *kNfacedCdl = R"(netcdf nfaced {
 dimensions:
 	len_name = 33 ;
@@ -502,8 +586,8 @@ dimensions:
 	num_nod_per_fa1 = 50 ;
 	num_el_in_blk1 = 2 ;
 	num_fac_per_el1 = 13 ;
-	num_nod_var = 1 ;
-	num_elem_var = 1 ;
+	num_nod_var = 2 ;
+	num_elem_var = 2 ;
 variables:
 	float time_whole(time_step) ;
 	int eb_prop1(num_el_blk) ;
@@ -519,6 +603,7 @@ variables:
 	int ebepecnt1(num_el_in_blk1) ;
 	char name_nod_var(num_nod_var, len_name) ;
 	float vals_nod_var1(time_step, num_nodes) ;
+	float vals_nod_var2(time_step, num_nodes) ;
 	char name_elem_var(num_elem_var, len_name) ;
 	float vals_elem_var1eb1(time_step, num_el_in_blk1) ;
 data:
@@ -533,9 +618,10 @@ data:
  fbepecnt1 = 4, 4, 4, 4, 4, 4, 5, 5, 4, 4, 4, 4 ;
  facconn1 = 1, 2, 3, 4, 5, 6,  6, 7, 8, 9, 10, 11, 12 ;
  ebepecnt1 = 6, 7 ;
- name_nod_var = "t" ;
+ name_nod_var = "t", "u" ;
  vals_nod_var1 = 0, 1, 1, 0, 0, 1, 1, 0, 2, 2, 2, 2, 1.5, 1.5 ;
- name_elem_var = "t" ;
+ vals_nod_var2 = 0, 1, 1, 0, 0, 1, 1, 0, 2, 2, 2, 2, 1.5, 1.5 ;
+ name_elem_var = "t", "u" ;
  vals_elem_var1eb1 = 10, 20 ;
 }
 )";
@@ -559,11 +645,21 @@ TEST_F(Polyhedra, ExodusNfacedBlocks) {
   std::vector<float> cellValues(mesh.fieldValues(cell).begin(), mesh.fieldValues(cell).end());
   EXPECT_EQ(std::count(cellValues.begin(), cellValues.end(), 10.f), 6);
   EXPECT_EQ(std::count(cellValues.begin(), cellValues.end(), 20.f), 11);
-  // The point field is x, and so is each centre's average.
+  // The point fields are x. The centres (the only points at y = 0.5): t takes the cell's value, u, whose
+  // cells are NaN, the corners' average, x.
   const auto points = mesh.points();
-  const auto values = mesh.fieldValues(point);
-  for (size_t i = 0; i < points.size(); ++i)
-    EXPECT_NEAR(values[i], points[i].x, 1e-5f);
+  const auto t = mesh.fieldValues(point), u = mesh.fieldValues(mesh.findField("point:u"));
+  int centres = 0;
+  for (size_t i = 0; i < points.size(); ++i) {
+    EXPECT_NEAR(u[i], points[i].x, 1e-5f);
+    if (points[i].y != 0.5f) {
+      EXPECT_NEAR(t[i], points[i].x, 1e-5f);
+      continue;
+    }
+    ++centres;
+    EXPECT_EQ(t[i], points[i].x < 1.f ? 10.f : 20.f) << points[i].x;
+  }
+  EXPECT_EQ(centres, 2);
   // The shared face listed twice by the prism: three uses, refused.
   std::string three = kNfacedCdl;
   const std::string prismFaces = "6, 7, 8, 9, 10, 11, 12 ;";

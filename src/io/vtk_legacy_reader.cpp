@@ -540,7 +540,7 @@ private:
     }
     if (components == 0)
       failLine("array '" + name + "' has no components");
-    ScalarField field{std::move(name), centering_, readValues<UninitVector<float>>(type, values)};
+    ScalarField field{std::move(name), centering_, readValues<UninitVector<float>>(type, values), components};
     if (components > 1) {
       for (uint64_t i = 0; i < tuples_; ++i) {
         double sum = 0.0;

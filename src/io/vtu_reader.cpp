@@ -891,7 +891,8 @@ private:
       uint64_t count = 0;
       if (multiplyOverflows(tuples, array.components, count))
         fail(array, array.position, "value count overflows");
-      ScalarField field{array.name, centering, readValues<UninitVector<float>>(array, count)};
+      ScalarField field{array.name, centering, readValues<UninitVector<float>>(array, count),
+                        array.components};
       if (array.components > 1) {
         UninitVector<float> magnitude(tuples);
         uint64_t components = array.components;

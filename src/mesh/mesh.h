@@ -18,6 +18,7 @@ struct ScalarField {
   std::string name;
   Centering centering = Centering::Point;
   UninitVector<float> values;
+  uint64_t components = 1; ///< of the file's array before the magnitude (kept by the readers of polyhedra)
 };
 
 /// Polyhedra of a file (VTK type 42) and the tetrahedra and pyramids they were decomposed into on load.

@@ -3,6 +3,7 @@
 #include <uvr/error.h>
 
 #include <algorithm>
+#include <cmath>
 
 namespace uvr {
 
@@ -102,6 +103,18 @@ void decomposePolyhedra(UnstructuredGrid &grid, const PolyhedronFaces &faces, co
   // Fields of the wrong size are reported by buildMesh; they are left alone here.
   std::erase_if(pointFields, [&](size_t i) { return grid.fields[i].values.size() != grid.points.size(); });
   std::erase_if(cellFields, [&](size_t i) { return grid.fields[i].values.size() != cellCount; });
+  // At a centre, a point field takes the cell field of its name and component count where there is one: in
+  // a finite-volume result that is the cell's mean, a second-order estimate at its centroid, where the
+  // corners hold values interpolated from cells (foamToVTK's own decomposition gives its centres the same).
+  std::vector<const ScalarField *> centreValues(pointFields.size(), nullptr);
+  for (size_t i = 0; i < pointFields.size(); ++i) {
+    const ScalarField &point = grid.fields[pointFields[i]];
+    for (size_t j : cellFields)
+      if (grid.fields[j].name == point.name && grid.fields[j].components == point.components) {
+        centreValues[i] = &grid.fields[j];
+        break;
+      }
+  }
 
   PolyhedronCounts &counts = grid.polyhedra;
   std::vector<int64_t> corners;
@@ -151,8 +164,13 @@ void decomposePolyhedra(UnstructuredGrid &grid, const PolyhedronFaces &faces, co
       centre = centre + grid.points[size_t(id)];
     const auto apex = int64_t(grid.points.size());
     grid.points.push_back(centre * (1.f / float(corners.size())));
-    for (size_t f : pointFields) {
-      UninitVector<float> &values = grid.fields[f].values;
+    for (size_t i = 0; i < pointFields.size(); ++i) {
+      UninitVector<float> &values = grid.fields[pointFields[i]].values;
+      // NaN: the file has no value in this cell (an Exodus block without the variable).
+      if (centreValues[i] && !std::isnan(centreValues[i]->values[c])) {
+        values.push_back(centreValues[i]->values[c]);
+        continue;
+      }
       double sum = 0.0;
       for (int64_t id : corners)
         sum += values[size_t(id)];

@@ -30,13 +30,15 @@ struct PolyhedronFaces {
 };
 
 /// Replaces each cell of type 42 in `grid` (its connectivity entries are not used) by tetrahedra and
-/// pyramids: a new point at the average of its points (point fields get the average of their values there),
-/// and for each face a tetrahedron (triangle) or a pyramid (quad) with that point as apex; faces of more
-/// points are fanned into triangles from their lowest-numbered point, which both cells of a face agree on.
-/// Each piece is wound as VTK expects, whichever way the face turns; cell fields are copied to the pieces.
-/// Counts them in grid.polyhedra. Throws uvr::Error naming `source` for polyhedra without faces, faces of
-/// fewer than 3 points, point indices outside the points, face ids outside the faces, and faces used by more
-/// than two polyhedra (so that a small file cannot ask for a huge mesh).
+/// pyramids: a new point at the average of its points, and for each face a tetrahedron (triangle) or a
+/// pyramid (quad) with that point as apex; faces of more points are fanned into triangles from their
+/// lowest-numbered point, which both cells of a face agree on. Each piece is wound as VTK expects, whichever
+/// way the face turns; cell fields are copied to the pieces. Counts them in grid.polyhedra. A point field's
+/// value at the new point is the cell's value of the cell field of the same name and component count where
+/// there is one (and that value is not NaN), else the average of the field's values at the cell's points.
+/// Throws uvr::Error naming `source` for polyhedra without faces, faces of fewer than 3 points, point indices
+/// outside the points, face ids outside the faces, and faces used by more than two polyhedra (so that a small
+/// file cannot ask for a huge mesh).
 void decomposePolyhedra(UnstructuredGrid &grid, const PolyhedronFaces &faces, const std::string &source);
 
 } // namespace uvr
