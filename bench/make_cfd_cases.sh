@@ -11,9 +11,8 @@
 # a few minutes on 2 cores (ITERATIONS below; the tutorials run 400 and 5000): the flow has developed around
 # the obstacles (initial residuals at the last step: windAroundBuildings U 1e-3 to 4e-3, p 3e-2;
 # turbineSiting U 4e-5, p 1e-4). Set ITERATIONS to change that. Serial runs (the tutorials decompose
-# turbineSiting for 4 processes). Measured on the 2-core development machine while 3 builds ran
-# (load average about 9): windAroundBuildings 3.0 CPU-minutes, 20 minutes wall; turbineSiting 0.8 CPU-minutes,
-# 7 minutes wall. windAroundBuildings: 185,237 cells (171,484 hexahedra, 1,102 prisms, 12,651 polyhedra),
+# turbineSiting for 4 processes). On the 2-core development machine: windAroundBuildings 193 s, turbineSiting
+# 56 s (20 and 7 minutes while 3 builds ran). windAroundBuildings: 185,237 cells (171,484 hexahedra, 1,102 prisms, 12,651 polyhedra),
 # 218,801 points; turbineSiting: 120,246 cells (107,146 hexahedra, 750 prisms, 12,350 polyhedra), 144,990
 # points. Writes OUT_DIR/CASE/ (the case, its logs) and OUT_DIR/CASE_{poly,decomp}.vtu (18-30 MB each).
 set -euo pipefail
