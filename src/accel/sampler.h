@@ -220,6 +220,10 @@ UVR_HOST_DEVICE UVR_HOST_INLINE bool walkTets(const VolumeView &volume, const Ra
 /// face to cross where it lies outside. Another cell is solved only where the sample lies within about all
 /// its faces' planes, else left across the face whose plane it lies furthest beyond. Gives up after
 /// `maxSteps` cells.
+/// How far beyond a triangle's plane, in units of the cell's size, a point may lie and still be tested
+/// against the cell: rounding, which the cell's test (kInsideTolerance) allows for too.
+constexpr float kTrianglePlaneSlack = 1e-4f;
+
 /// How far beyond a hexahedron's face, in parametric units, a walk takes the last sample's coordinates
 /// carried along the ray at their word: their error grows with the square of the distance and with the
 /// cell's distortion; a wrong guess costs a step back.
@@ -259,13 +263,16 @@ UVR_HOST_DEVICE inline bool walkCells(const VolumeView &volume, const Ray &ray, 
         face = hexFaceBeyond(r, beyond);
       }
     } else {
-      face = furthestFace(volume.cellFacePlanes, other, p, beyond);
-      // Faces of distorted cells are not planar: near their planes, the cell's own test decides.
-      if (beyond <= 0.25f)
-        inside = other < mesh.pyramidCount
-                     ? sampleIsoparametric<5>(mesh, mesh.pyramids + 5 * other, current, p, value, &along)
-                     : sampleIsoparametric<6>(mesh, mesh.wedges + 6 * (other - mesh.pyramidCount), current, p,
-                                              value, &along);
+      const bool pyramid = other < mesh.pyramidCount;
+      float beyondTriangles;
+      face = furthestFace(volume.cellFacePlanes, other, p, pyramid ? kPyramidTriangles : kWedgeTriangles,
+                          beyond, beyondTriangles);
+      // A quad of a distorted cell is not planar: near its plane, the cell's own test decides. A triangle's
+      // plane does at once.
+      if (beyond <= 0.25f && beyondTriangles <= kTrianglePlaneSlack)
+        inside = pyramid ? sampleIsoparametric<5>(mesh, mesh.pyramids + 5 * other, current, p, value, &along)
+                         : sampleIsoparametric<6>(mesh, mesh.wedges + 6 * (other - mesh.pyramidCount),
+                                                  current, p, value, &along);
     }
     if (inside) {
       at.enter(current);

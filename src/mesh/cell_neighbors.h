@@ -97,19 +97,27 @@ uint64_t cellAdjacencyBytes(const MeshView &mesh);
 /// coordinates (walkCells).
 std::vector<Vec4f> buildCellFacePlanes(const MeshView &mesh);
 
-/// The face of the `index`-th cell that is not a tet whose plane `p` lies furthest beyond, and how far.
-UVR_HOST_DEVICE inline int furthestFace(const Vec4f *planes, uint64_t index, Vec3f p, float &beyond) {
+/// The face of the `index`-th cell that is not a tet whose plane `p` lies furthest beyond, and how far; and
+/// in `beyondTriangles` how far beyond the furthest of the faces in `triangles` (a bit per face). A triangle
+/// lies in its plane, a quad of a distorted cell need not.
+UVR_HOST_DEVICE inline int furthestFace(const Vec4f *planes, uint64_t index, Vec3f p, unsigned triangles,
+                                        float &beyond, float &beyondTriangles) {
   const Vec4f *plane = planes + kMaxCellFaces * index;
   int furthest = 0;
-  beyond = plane[0].x * p.x + plane[0].y * p.y + plane[0].z * p.z + plane[0].w;
-  for (int f = 1; f < kMaxCellFaces; ++f) {
+  beyond = beyondTriangles = -INFINITY;
+  for (int f = 0; f < kMaxCellFaces; ++f) {
     const float distance = plane[f].x * p.x + plane[f].y * p.y + plane[f].z * p.z + plane[f].w;
     if (distance > beyond) {
       beyond = distance;
       furthest = f;
     }
+    if (triangles >> f & 1u)
+      beyondTriangles = maxf(beyondTriangles, distance);
   }
   return furthest;
 }
+
+/// The faces of a pyramid and of a wedge that are triangles, a bit per face in cellFaces' order.
+constexpr unsigned kPyramidTriangles = 0b11110u, kWedgeTriangles = 0b00011u;
 
 } // namespace uvr
