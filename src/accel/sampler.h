@@ -215,11 +215,6 @@ UVR_HOST_DEVICE UVR_HOST_INLINE bool walkTets(const VolumeView &volume, const Ra
   return false;
 }
 
-/// Steps through cells other than tets towards the sample at `t` on `ray`, from `start`; a tet on the way
-/// hands over to walkTets. A hexahedron is solved for the sample's parametric coordinates, which name the
-/// face to cross where it lies outside. Another cell is solved only where the sample lies within about all
-/// its faces' planes, else left across the face whose plane it lies furthest beyond. Gives up after
-/// `maxSteps` cells.
 /// How far beyond a triangle's plane, in units of the cell's size, a point may lie and still be tested
 /// against the cell: rounding, which the cell's test (kInsideTolerance) allows for too.
 constexpr float kTrianglePlaneSlack = 1e-4f;
@@ -229,6 +224,11 @@ constexpr float kTrianglePlaneSlack = 1e-4f;
 /// cell's distortion; a wrong guess costs a step back.
 constexpr float kHexLeaveUnsolved = 0.01f;
 
+/// Steps through cells other than tets towards the sample at `t` on `ray`, from `start`; a tet on the way
+/// hands over to walkTets. A hexahedron is solved for the sample's parametric coordinates, which name the
+/// face to cross where it lies outside. Another cell is solved only where the sample lies within about all
+/// its faces' planes, else left across the face whose plane it lies furthest beyond. Gives up after
+/// `maxSteps` cells.
 template <class Sampling>
 UVR_HOST_DEVICE inline bool walkCells(const VolumeView &volume, const Ray &ray, float t, uint32_t start,
                                       int maxSteps, RayCell &at, float &value) {
