@@ -254,13 +254,9 @@ UVR_HOST_DEVICE inline bool walkCells(const VolumeView &volume, const Ray &ray, 
       face = hexFaceBeyond(along.start, beyond);
       if (!along.warm || step > 0 || beyond <= kHexLeaveUnsolved) {
         along.anywhere = true;
-        const uint32_t *v = mesh.hexes + 8 * (current - firstHex);
-        Vec3f r;
-        inside = parametricCoordinates<8>(mesh.points, v, p, r, &along) && insideReference(r, 8);
-        if (inside)
-          value = interpolateIsoparametric<8>(mesh, v, current, r);
-        along.start = r;
-        face = hexFaceBeyond(r, beyond);
+        inside =
+            sampleIsoparametric<8>(mesh, mesh.hexes + 8 * (current - firstHex), current, p, value, &along);
+        face = hexFaceBeyond(along.start, beyond);
       }
     } else {
       const bool pyramid = other < mesh.pyramidCount;

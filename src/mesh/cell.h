@@ -295,20 +295,6 @@ UVR_HOST_DEVICE inline CellType cellType(const MeshView &mesh, uint64_t cell) {
   return cell < mesh.wedgeCount ? CellType::Wedge : CellType::Hexahedron;
 }
 
-/// The field at parametric coordinates `r` of `cell`, whose corners are `v`.
-template <int N>
-UVR_HOST_DEVICE inline float interpolateIsoparametric(const MeshView &mesh, const uint32_t *v, uint64_t cell,
-                                                      Vec3f r) {
-  if (mesh.cellCentered)
-    return mesh.values[cell];
-  ShapeFunctions<N> s;
-  evaluateShape(r, s);
-  float value = 0.f;
-  for (int i = 0; i < N; ++i)
-    value += s.value[i] * mesh.values[v[i]];
-  return value;
-}
-
 /// The field at `p` if `p` lies in the cell of corners `v`; `along` as parametricCoordinates takes it, its
 /// `start` left at the coordinates found.
 template <int N>
@@ -320,7 +306,15 @@ UVR_HOST_DEVICE inline bool sampleIsoparametric(const MeshView &mesh, const uint
     along->start = r;
   if (!solved || !insideReference(r, N))
     return false;
-  value = interpolateIsoparametric<N>(mesh, v, cell, r);
+  if (mesh.cellCentered) {
+    value = mesh.values[cell];
+    return true;
+  }
+  ShapeFunctions<N> s;
+  evaluateShape(r, s);
+  value = 0.f;
+  for (int i = 0; i < N; ++i)
+    value += s.value[i] * mesh.values[v[i]];
   return true;
 }
 
