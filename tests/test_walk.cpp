@@ -268,7 +268,7 @@ TEST(WalkCells, FindTheCellHoldingEachSample) {
         const Vec3f p = ray.at(t);
         float value;
         ++walks;
-        if (!walkCells<HostSampling>(volume, ray, t, at.cell, 64, at, value)) {
+        if (!walkCells<HostSampling>(volume, ray, t, at.cell, false, 64, at, value)) {
           ++failed;
           at.enter(cellHolding(volume.mesh, p));
           continue;
@@ -283,4 +283,99 @@ TEST(WalkCells, FindTheCellHoldingEachSample) {
     EXPECT_GT(steps, 200); // the walks did cross cells
     EXPECT_LT(failed, walks / 100) << failed << " of " << walks;
   }
+}
+
+// In a lattice of pyramids (six around each cube's centre) whose pyramids on the cube's sides are each cut
+// into two tets, walks along random rays go from tets into pyramids across the triangles they share: linked
+// both ways (linkTetsToOtherCells), a walk that starts in a tet goes on into the other cells rather than stop
+// there as at the boundary, where the sampler would fall back on the BVH.
+TEST(WalkCells, GoOnFromTetsIntoTheOtherCells) {
+  const UnstructuredGrid pyramids = makeBoxGrid(
+      CellType::Pyramid, 4, kCube, [](Vec3f p) { return p.x * p.y + p.z; }, 0.3f, 5);
+  UnstructuredGrid grid = pyramids;
+  grid.offsets = {0};
+  grid.connectivity.clear();
+  grid.types.clear();
+  grid.fields.resize(1); // the point field: the cells change
+  for (size_t c = 0; c + 1 < pyramids.offsets.size(); ++c) {
+    const int64_t *v = pyramids.connectivity.data() + pyramids.offsets[c]; // base 0-3, apex 4
+    bool onSide = false;
+    for (int axis = 0; axis < 3; ++axis) {
+      bool same = std::fabs(pyramids.points[size_t(v[0])][axis]) == 1.f;
+      for (int i = 1; i < 4; ++i)
+        same = same && pyramids.points[size_t(v[i])][axis] == pyramids.points[size_t(v[0])][axis];
+      onSide = onSide || same;
+    }
+    const std::vector<std::vector<int64_t>> cells =
+        onSide ? std::vector<std::vector<int64_t>>{{v[0], v[1], v[2], v[4]}, {v[0], v[2], v[3], v[4]}}
+               : std::vector<std::vector<int64_t>>{{v[0], v[1], v[2], v[3], v[4]}};
+    for (const std::vector<int64_t> &cell : cells) {
+      grid.connectivity.insert(grid.connectivity.end(), cell.begin(), cell.end());
+      grid.offsets.push_back(int64_t(grid.connectivity.size()));
+      grid.types.push_back(cell.size() == 4 ? uint8_t(10) : uint8_t(14));
+    }
+  }
+  const Mesh mesh = buildMesh(std::move(grid), "pyramids and tets");
+  VolumeView volume;
+  volume.mesh = makeMeshView(mesh, 0);
+  ASSERT_GT(volume.mesh.tetCount, 0u);
+  ASSERT_GT(volume.mesh.pyramidCount, 0u);
+  const std::vector<uint32_t> cellNeighbors = buildCellNeighbors(mesh);
+  const std::vector<Vec4f> planes = buildCellFacePlanes(volume.mesh);
+  const std::vector<uint32_t> tetsOnly = buildTetNeighbors(mesh);
+  std::vector<uint32_t> linked = tetsOnly;
+  linkTetsToOtherCells(volume.mesh, cellNeighbors, linked);
+  // Each new link names a pyramid holding the three corners of the tet's face.
+  int links = 0;
+  for (uint64_t entry = 0; entry < linked.size(); ++entry) {
+    if (linked[entry] == tetsOnly[entry])
+      continue;
+    ++links;
+    ASSERT_EQ(tetsOnly[entry], kNoCell);
+    ASSERT_GE(linked[entry], volume.mesh.tetCount);
+    int count;
+    const uint32_t *corners = cellCorners(volume.mesh, linked[entry], count);
+    const uint32_t *tet = volume.mesh.tets + 4 * (entry / 4);
+    for (uint64_t i = 0; i < 4; ++i)
+      if (i != entry % 4)
+        EXPECT_EQ(std::count(corners, corners + count, tet[i]), 1);
+  }
+  EXPECT_GT(links, int(volume.mesh.tetCount));
+  volume.cellNeighbors = cellNeighbors.data();
+  volume.cellFacePlanes = planes.data();
+  // Walks from each sample's cell to the next; those that start in a tet and end in another cell, and those
+  // that fail.
+  const auto walk = [&](const std::vector<uint32_t> &tetNeighbors, int &fromTets) {
+    volume.tetNeighbors = tetNeighbors.data();
+    std::mt19937 random(9);
+    int failed = 0;
+    fromTets = 0;
+    for (int r = 0; r < 1000; ++r) {
+      const auto [origin, ray, tExit] = randomRayInCube(random);
+      RayCell at;
+      at.enter(cellHolding(volume.mesh, origin));
+      EXPECT_NE(at.cell, kNoCell);
+      for (float t = 0.f; t < tExit - 1e-3f; t += 0.1f) {
+        const uint32_t from = at.cell;
+        const Vec3f p = ray.at(t);
+        float value;
+        if (!walkCells<HostSampling>(volume, ray, t, at.cell, true, 64, at, value)) {
+          ++failed;
+          at.enter(cellHolding(volume.mesh, p));
+          continue;
+        }
+        EXPECT_TRUE(cellContains(volume.mesh, at.cell, p));
+        fromTets += from < volume.mesh.tetCount && at.cell >= volume.mesh.tetCount;
+      }
+    }
+    return failed;
+  };
+  int fromTets = 0, fromTetsUnlinked = 0;
+  const int failed = walk(linked, fromTets);
+  const int failedUnlinked = walk(tetsOnly, fromTetsUnlinked);
+  EXPECT_GT(fromTets, 50);
+  EXPECT_LT(failed, fromTets / 2) << failed << " walks failed";
+  // Unlinked, such a walk stops at the tet's face as at the boundary.
+  EXPECT_EQ(fromTetsUnlinked, 0);
+  EXPECT_GE(failedUnlinked, failed + fromTets / 2) << failedUnlinked << " walks failed unlinked";
 }

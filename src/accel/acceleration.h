@@ -24,7 +24,7 @@ template <typename Storage> struct Acceleration {
   BvhArrays<Storage> bvh;
   OccupancyBits<Storage> occupancy;
   SeedGridArrays<Storage> seeds;
-  Array<uint32_t> tetNeighbors;     ///< 4 per tet; see buildTetNeighbors
+  Array<uint32_t> tetNeighbors;     ///< 4 per tet; see buildTetNeighbors, linkTetsToOtherCells
   Array<uint32_t> cellNeighbors;    ///< empty for tets alone, or where memory is short
   Array<Vec4f> cellFacePlanes;      ///< likewise
   Array<uint32_t> boundaryFaceList; ///< for the per-frame crossings; empty where the grid lists none

@@ -30,6 +30,7 @@ HostAcceleration buildHostAcceleration(const Mesh &mesh, const MeshView &view, u
   if (walkAidFits(cellAdjacencyBytes(view))) {
     built.cellNeighbors = buildCellNeighbors(mesh);
     built.cellFacePlanes = buildCellFacePlanes(view);
+    linkTetsToOtherCells(view, built.cellNeighbors, built.tetNeighbors);
   }
   built.seeds = buildSeedGrid(view, built.tetNeighbors.empty() ? nullptr : built.tetNeighbors.data());
   if (!built.tetNeighbors.empty() && listsBoundaryFaces(view))

@@ -87,8 +87,8 @@ struct CellTrail {
 };
 
 /// The tet that most likely holds `p`, a point a fraction of a cell from one in `tet`: `tet`, or where `p`
-/// lies beyond a face, the tet across the face it lies furthest beyond. Computed without a branch, since
-/// which way it goes is a coin toss. Host only: it reads the records.
+/// lies beyond a face, the tet (not another cell) across the face it lies furthest beyond. Computed without a
+/// branch, since which way it goes is a coin toss. Host only: it reads the records.
 inline uint32_t likelyTet(const VolumeView &volume, uint32_t tet, Vec3f p) {
   float w[4], value;
   volume.tetAffine[tet].at(p, w, value);
@@ -98,7 +98,8 @@ inline uint32_t likelyTet(const VolumeView &volume, uint32_t tet, Vec3f p) {
   const unsigned lowestFaces =
       unsigned(w[0] == lowest) | unsigned(w[1] == lowest) << 1 | unsigned(w[2] == lowest) << 2 | 8u;
   const uint32_t across = volume.tetNeighbors[4 * uint64_t(tet) + uint64_t(__builtin_ctz(lowestFaces))];
-  const uint32_t moves = 0u - (uint32_t(lowest < -kInsideTolerance) & uint32_t(across != kNoCell));
+  const uint32_t moves =
+      0u - (uint32_t(lowest < -kInsideTolerance) & uint32_t(across < volume.mesh.tetCount));
   return tet ^ ((tet ^ across) & moves);
 }
 
@@ -147,14 +148,22 @@ UVR_HOST_DEVICE UVR_HOST_INLINE bool tetWeightsAlong(const MeshView &mesh, const
                               direction, w, dw);
 }
 
+/// Where a walk through tets stopped at another cell (see walkTets): that cell, and the tets it stepped
+/// through.
+struct WalkHandover {
+  uint32_t cell = kNoCell;
+  int steps = 0;
+};
+
 /// Steps through tets towards the sample at `t` on `ray`, from `start` across the face the sample lies
 /// furthest beyond (see nextTet; `alongRay`: the ray passes through `start`), as long as that is a tet; on
 /// success `at` describes the tet holding the sample and `value` is the field there. Gives up after
-/// `maxSteps` tets.
+/// `maxSteps` tets; where the next cell is another than a tet (linkTetsToOtherCells), stops and names it in
+/// `handover`, if given.
 template <class Sampling>
 UVR_HOST_DEVICE UVR_HOST_INLINE bool walkTets(const VolumeView &volume, const Ray &ray, float t,
                                               uint32_t start, bool alongRay, int maxSteps, RayCell &at,
-                                              float &value) {
+                                              float &value, WalkHandover *handover = nullptr) {
   const MeshView &mesh = volume.mesh;
   uint32_t current = start;
   int step = 0;
@@ -212,6 +221,8 @@ UVR_HOST_DEVICE UVR_HOST_INLINE bool walkTets(const VolumeView &volume, const Ra
   // rather than follow the ray out again for every sample in the empty space beyond.
   if (alongRay && current == kNoCell)
     at.onRay = false;
+  if (handover && current != kNoCell && current >= mesh.tetCount)
+    *handover = {current, step};
   return false;
 }
 
@@ -224,22 +235,32 @@ constexpr float kTrianglePlaneSlack = 1e-4f;
 /// cell's distortion; a wrong guess costs a step back.
 constexpr float kHexLeaveUnsolved = 0.01f;
 
-/// Steps through cells other than tets towards the sample at `t` on `ray`, from `start`; a tet on the way
-/// hands over to walkTets. A hexahedron is solved for the sample's parametric coordinates, which name the
-/// face to cross where it lies outside. Another cell is solved only where the sample lies within about all
-/// its faces' planes, else left across the face whose plane it lies furthest beyond. Gives up after
-/// `maxSteps` cells.
+/// Steps through cells of any type towards the sample at `t` on `ray`, from `start`: tets by walkTets (with
+/// `alongRay` where the walk starts in one), which hands back where it reaches another cell. A hexahedron is
+/// solved for the sample's parametric coordinates, which name the face to cross where it lies outside.
+/// Another cell is solved only where the sample lies within about all its faces' planes, else left across
+/// the face whose plane it lies furthest beyond. Gives up after `maxSteps` cells.
 template <class Sampling>
 UVR_HOST_DEVICE inline bool walkCells(const VolumeView &volume, const Ray &ray, float t, uint32_t start,
-                                      int maxSteps, RayCell &at, float &value) {
+                                      bool alongRay, int maxSteps, RayCell &at, float &value) {
   const MeshView &mesh = volume.mesh;
   const Vec3f p = ray.at(t);
   const uint64_t firstHex = mesh.tetCount + mesh.pyramidCount + mesh.wedgeCount;
   uint32_t current = start;
   for (int step = 0; step < maxSteps && current != kNoCell; ++step) {
-    if (current < mesh.tetCount)
-      return volume.tetNeighbors &&
-             walkTets<Sampling>(volume, ray, t, current, false, maxSteps - step, at, value);
+    if (current < mesh.tetCount) {
+      WalkHandover handover;
+      if (!volume.tetNeighbors)
+        return false;
+      if (walkTets<Sampling>(volume, ray, t, current, alongRay && step == 0, maxSteps - step, at, value,
+                             &handover))
+        return true;
+      if (handover.cell == kNoCell)
+        return false;
+      current = handover.cell;
+      step += handover.steps;
+      continue;
+    }
     const uint64_t other = uint64_t(current) - mesh.tetCount;
     RaySolve along;
     along.direction = ray.direction;
@@ -293,11 +314,13 @@ UVR_HOST_DEVICE inline bool walkCells(const VolumeView &volume, const Ray &ray, 
 /// parity; and a point the parity leaves inside (the walk left the mesh through a concavity, or ran out of
 /// steps) is walked to again from a cell near it (SeedGridView::startNear), so that the BVH, a long divergent
 /// query on a GPU, is left for what neither walk finds. Without `skipEmpty` a failed walk goes to the BVH, as
-/// in a plain ray marcher.
+/// in a plain ray marcher. With `pastMesh`, the sample lies past the ray's last crossing out of the mesh: a
+/// cell there is one of the boundary's, bulging past the triangles the crossings were found on (a quad's
+/// bilinear face), so the first walk finds it or no cell holds the sample, and nothing slower is tried.
 template <class Sampling>
-UVR_HOST_DEVICE UVR_HOST_INLINE bool locateSample(const VolumeView &volume, bool skipEmpty, bool clearVoxels,
-                                                  const Ray &ray, float t, int walkSteps, bool far,
-                                                  uint32_t guess, RayCell &at, float &value) {
+UVR_HOST_DEVICE UVR_HOST_INLINE bool
+locateSample(const VolumeView &volume, bool skipEmpty, bool clearVoxels, const Ray &ray, float t,
+             int walkSteps, bool far, uint32_t guess, RayCell &at, float &value, bool pastMesh = false) {
   const Vec3f p = ray.at(t);
   if (skipEmpty && clearVoxels && !volume.occupancy.mayHoldCell(p))
     return false;
@@ -308,12 +331,13 @@ UVR_HOST_DEVICE UVR_HOST_INLINE bool locateSample(const VolumeView &volume, bool
     return true;
   // A walk from `start`; a cell other than a tet is tested alone where the policy has no walks for it.
   auto locateFrom = [&](uint32_t start, int steps) {
-    if (volume.tetNeighbors && start < volume.mesh.tetCount)
-      return walkTets<Sampling>(volume, ray, t, start, start == at.cell && at.onRay, steps, at, value);
+    const bool alongRay = start == at.cell && at.onRay;
     if constexpr (Sampling::kCellWalks) {
-      if (volume.cellNeighbors && start >= volume.mesh.tetCount)
-        return walkCells<Sampling>(volume, ray, t, start, steps, at, value);
+      if (volume.cellNeighbors)
+        return walkCells<Sampling>(volume, ray, t, start, alongRay, steps, at, value);
     }
+    if (volume.tetNeighbors && start < volume.mesh.tetCount)
+      return walkTets<Sampling>(volume, ray, t, start, alongRay, steps, at, value);
     if (!sampleCell(volume.mesh, start, p, value))
       return false;
     at.enter(start);
@@ -323,6 +347,8 @@ UVR_HOST_DEVICE UVR_HOST_INLINE bool locateSample(const VolumeView &volume, bool
   const uint32_t start = seed != kNoCell ? seed : at.cell;
   if (start != kNoCell && locateFrom(start, seed != kNoCell ? kSeedWalkSteps : walkSteps))
     return true;
+  if (pastMesh)
+    return false;
   if (skipEmpty) {
     if (volume.seeds.outsideMesh(volume.mesh, p))
       return false;
@@ -430,17 +456,19 @@ template <class Sampling> struct RaySampler {
   }
 
   /// The field at `t`, grid point `k`, into `value`; false where no cell holds the sample. `walkSteps` and
-  /// `far` as locateSample takes them.
-  UVR_HOST_DEVICE UVR_HOST_INLINE bool sample(float t, float k, int walkSteps, bool far, float &value) {
+  /// `far` and `pastMesh` as locateSample takes them.
+  UVR_HOST_DEVICE UVR_HOST_INLINE bool sample(float t, float k, int walkSteps, bool far, float &value,
+                                              bool pastMesh) {
     if constexpr (!Sampling::kTrail) {
       return locateSample<Sampling>(volume, skipEmpty, clearVoxels, ray, t, walkSteps, far, kNoCell, at,
-                                    value);
+                                    value, pastMesh);
     } else {
       // Compared as floats: k may lie past what a uint32_t holds where the trail ends.
       const bool trailed = k < float(trail.size);
       const uint32_t index = trailed ? uint32_t(k) : 0;
-      const bool located = locateSample<Sampling>(volume, skipEmpty, clearVoxels, ray, t, walkSteps, far,
-                                                  trailed ? trail.cells[index] : kNoCell, at, value);
+      const bool located =
+          locateSample<Sampling>(volume, skipEmpty, clearVoxels, ray, t, walkSteps, far,
+                                 trailed ? trail.cells[index] : kNoCell, at, value, pastMesh);
       if (trailed) {
         uint32_t cell = located && at.cell < volume.mesh.tetCount ? at.cell : kNoCell;
         if (predict && cell != kNoCell)

@@ -18,7 +18,7 @@ struct VolumeView {
   BvhView bvh;
   OccupancyView occupancy;                 ///< used by the skipping modes
   SeedGridView seeds;                      ///< where far walks start; boundary faces per voxel
-  const uint32_t *tetNeighbors = nullptr;  ///< 4 per tet; see buildTetNeighbors
+  const uint32_t *tetNeighbors = nullptr;  ///< 4 per tet; see buildTetNeighbors, linkTetsToOtherCells
   const TetAffine *tetAffine = nullptr;    ///< per tet, or null: walks then read the corners
   const uint32_t *cellNeighbors = nullptr; ///< the other cells' faces' neighbours; see buildCellNeighbors
   const Vec4f *cellFacePlanes = nullptr;   ///< and their planes; see buildCellFacePlanes

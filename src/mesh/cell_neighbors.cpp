@@ -1,5 +1,6 @@
 #include "mesh/cell_neighbors.h"
 
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
 
@@ -89,15 +90,15 @@ std::vector<uint32_t> buildCellNeighbors(const Mesh &cells) {
   return neighbors;
 }
 
-std::vector<uint32_t> listBoundaryCellFaces(const MeshView &mesh, const uint32_t *tetNeighbors,
-                                            const std::vector<uint32_t> &cellNeighbors) {
-  const uint64_t otherCells = mesh.cellCount() - mesh.tetCount;
-  if (otherCells == 0 || mesh.cellCount() > (uint64_t(1) << 29) || (mesh.tetCount > 0 && !tetNeighbors) ||
-      cellNeighbors.size() != kMaxCellFaces * otherCells)
-    return {};
-  // A tet face that another cell shares has no tet across: a bit per face marks those the other cells name.
-  std::vector<uint8_t> sharedTetFaces(mesh.tetCount, 0);
-  for (uint64_t other = 0; other < otherCells; ++other) {
+namespace {
+
+/// Calls `visit(tet, i, cell)` for each face i of a tet (the one opposite its corner i) that `cellNeighbors`
+/// says another cell `cell` shares, for other cells [begin, end) (counted from the first cell that is not a
+/// tet).
+template <class Visit>
+void forEachTetFaceOfOtherCells(const MeshView &mesh, const std::vector<uint32_t> &cellNeighbors,
+                                uint64_t begin, uint64_t end, Visit &&visit) {
+  for (uint64_t other = begin; other < end; ++other) {
     const uint64_t cell = mesh.tetCount + other;
     int count;
     const uint32_t *v = cellCorners(mesh, cell, count);
@@ -113,10 +114,39 @@ std::vector<uint32_t> listBoundaryCellFaces(const MeshView &mesh, const uint32_t
         for (int k = 0; k < 4 && faces.corners[f][k] >= 0; ++k)
           held = held || v[faces.corners[f][k]] == tet[corner];
         if (!held)
-          sharedTetFaces[across] |= uint8_t(1u << corner);
+          visit(across, corner, uint32_t(cell));
       }
     }
   }
+}
+
+} // namespace
+
+void linkTetsToOtherCells(const MeshView &mesh, const std::vector<uint32_t> &cellNeighbors,
+                          std::span<uint32_t> tetNeighbors) {
+  const uint64_t otherCells = mesh.cellCount() - mesh.tetCount;
+  if (otherCells == 0 || cellNeighbors.size() != kMaxCellFaces * otherCells ||
+      tetNeighbors.size() != 4 * mesh.tetCount)
+    return;
+  // A tet face has one cell across, so each entry is written by one cell at most.
+  tbb::parallel_for(tbb::blocked_range<uint64_t>(0, otherCells), [&](const tbb::blocked_range<uint64_t> &r) {
+    forEachTetFaceOfOtherCells(
+        mesh, cellNeighbors, r.begin(), r.end(),
+        [&](uint32_t tet, int i, uint32_t cell) { tetNeighbors[4 * uint64_t(tet) + uint64_t(i)] = cell; });
+  });
+}
+
+std::vector<uint32_t> listBoundaryCellFaces(const MeshView &mesh, const uint32_t *tetNeighbors,
+                                            const std::vector<uint32_t> &cellNeighbors) {
+  const uint64_t otherCells = mesh.cellCount() - mesh.tetCount;
+  if (otherCells == 0 || mesh.cellCount() > (uint64_t(1) << 29) || (mesh.tetCount > 0 && !tetNeighbors) ||
+      cellNeighbors.size() != kMaxCellFaces * otherCells)
+    return {};
+  // A tet face that another cell shares has no tet across: a bit per face marks those the other cells name
+  // (`tetNeighbors` may not, see linkTetsToOtherCells).
+  std::vector<uint8_t> sharedTetFaces(mesh.tetCount, 0);
+  forEachTetFaceOfOtherCells(mesh, cellNeighbors, 0, otherCells,
+                             [&](uint32_t tet, int i, uint32_t) { sharedTetFaces[tet] |= uint8_t(1u << i); });
   std::vector<uint32_t> faces;
   const uint32_t bits = boundaryFaceBits(mesh);
   for (uint64_t tet = 0; tet < mesh.tetCount; ++tet)

@@ -9,6 +9,7 @@
 #include "mesh/mesh_view.h"
 
 #include <cstdint>
+#include <span>
 #include <vector>
 
 namespace uvr {
@@ -78,6 +79,12 @@ UVR_HOST_DEVICE inline int boundaryFaceCorners(const MeshView &mesh, uint32_t fa
 /// for a mesh of tets alone or of more than 2^29 cells.
 std::vector<uint32_t> listBoundaryCellFaces(const MeshView &mesh, const uint32_t *tetNeighbors,
                                             const std::vector<uint32_t> &cellNeighbors);
+
+/// Gives each tet face that another cell shares, which `tetNeighbors` (buildTetNeighbors: 4 per tet, tets
+/// alone) leaves at kNoCell, that cell, as `cellNeighbors` (buildCellNeighbors) names it: a walk through tets
+/// then goes on into the other cells rather than stop as at the boundary.
+void linkTetsToOtherCells(const MeshView &mesh, const std::vector<uint32_t> &cellNeighbors,
+                          std::span<uint32_t> tetNeighbors);
 
 /// For each cell that is not a tet and each of its faces (cellFaces' order), the cell across it, a tet
 /// included, or kNoCell: kMaxCellFaces entries per cell, at kMaxCellFaces * (cell - tet count). Empty for a

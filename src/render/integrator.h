@@ -176,7 +176,10 @@ struct RayMarch : ShadeState<kShade || kIso>, IsoState<kIso> {
       }
       ++samples;
       float value;
-      const bool inside = sampler.sample(t, k, walkSteps, far, value);
+      // A segment closed past the ray's last crossing out of the mesh: its end lies outside but for the
+      // boundary's bulges, which the walk finds; the slow ways a missed sample takes would find nothing more
+      // (on a GPU, a BVH query that keeps the warp waiting).
+      const bool inside = sampler.sample(t, k, walkSteps, far, value, closing && intervals.pastMesh(t));
       const bool refining = kAligned > k;
       kNext = refining ? (inside ? kAligned : k + 1.f) : k + stride;
       if constexpr (kPreintegrate) {

@@ -202,6 +202,9 @@ public:
                         : adaptiveStepSize(settings_.s1, settings_.s2, settings_.p, sigma));
   }
 
+  /// Whether t lies past where the skipping modes march the ray: beyond its last boundary crossing, or where
+  /// that is not known, beyond the mesh bounds. No cell holds a point there.
+  UVR_HOST_DEVICE bool pastMesh(float t) const { return skip_ && t > tStop_; }
   /// Whether the ray leaves the mesh and enters it again: grid points may then lie in a gap (pastGap).
   UVR_HOST_DEVICE bool hasGaps() const { return gaps_; }
   /// Where the march goes on from grid point t: past the gap in the mesh that holds t, if one does, else t;

@@ -256,6 +256,8 @@ CudaBackend::CudaBackend(const Mesh &hostMesh, const MeshView &mesh, uint32_t le
     if (cellAdjacencyBytes(mesh) <= freeBytes / 8) {
       copyMember(d.accel.cellNeighbors, cellNeighbors);
       copyMember(d.accel.cellFacePlanes, buildCellFacePlanes(mesh));
+      linkTetsToOtherCells(mesh, cellNeighbors, tetNeighbors);
+      copyMember(d.accel.tetNeighbors, tetNeighbors);
     }
     d.buildSteps.emplace_back("cell adjacency (host)", adjacency.milliseconds());
   }
