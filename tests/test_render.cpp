@@ -100,31 +100,11 @@ Mesh notchedHexShell() {
                    "hex shell");
 }
 
-/// A lattice of pyramids (six around each cube's centre) whose pyramids on the box's faces are each cut into
-/// two tets: tets, pyramids and the faces between them.
+/// Tets, pyramids and the faces between them (makePyramidsAndTets), with the point field alone.
 Mesh pyramidsAndTets() {
-  const UnstructuredGrid pyramids = makeBoxGrid(CellType::Pyramid, 6, kBox, radial, 0.2f);
-  UnstructuredGrid mixed = keepCells(pyramids, [](Vec3f) { return false; });
-  for (size_t c = 0; c + 1 < pyramids.offsets.size(); ++c) {
-    const int64_t *v = pyramids.connectivity.data() + pyramids.offsets[c]; // base 0-3, apex 4
-    bool onBox = false;
-    for (int axis = 0; axis < 3; ++axis) {
-      bool same = true;
-      for (int i = 0; i < 4; ++i)
-        same = same && std::fabs(pyramids.points[size_t(v[i])][axis]) == 1.f &&
-               pyramids.points[size_t(v[i])][axis] == pyramids.points[size_t(v[0])][axis];
-      onBox = onBox || same;
-    }
-    const std::vector<std::vector<int64_t>> cells =
-        onBox ? std::vector<std::vector<int64_t>>{{v[0], v[1], v[2], v[4]}, {v[0], v[2], v[3], v[4]}}
-              : std::vector<std::vector<int64_t>>{{v[0], v[1], v[2], v[3], v[4]}};
-    for (const std::vector<int64_t> &cell : cells) {
-      mixed.connectivity.insert(mixed.connectivity.end(), cell.begin(), cell.end());
-      mixed.offsets.push_back(int64_t(mixed.connectivity.size()));
-      mixed.types.push_back(cell.size() == 4 ? uint8_t(10) : uint8_t(14));
-    }
-  }
-  return buildMesh(std::move(mixed), "pyramids and tets");
+  UnstructuredGrid grid = makePyramidsAndTets(6, kBox, radial, 0.2f);
+  grid.fields.resize(1);
+  return buildMesh(std::move(grid), "pyramids and tets");
 }
 
 Camera obliqueCamera() {

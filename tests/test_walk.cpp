@@ -290,31 +290,9 @@ TEST(WalkCells, FindTheCellHoldingEachSample) {
 // both ways (linkTetsToOtherCells), a walk that starts in a tet goes on into the other cells rather than stop
 // there as at the boundary, where the sampler would fall back on the BVH.
 TEST(WalkCells, GoOnFromTetsIntoTheOtherCells) {
-  const UnstructuredGrid pyramids = makeBoxGrid(
-      CellType::Pyramid, 4, kCube, [](Vec3f p) { return p.x * p.y + p.z; }, 0.3f, 5);
-  UnstructuredGrid grid = pyramids;
-  grid.offsets = {0};
-  grid.connectivity.clear();
-  grid.types.clear();
-  grid.fields.resize(1); // the point field: the cells change
-  for (size_t c = 0; c + 1 < pyramids.offsets.size(); ++c) {
-    const int64_t *v = pyramids.connectivity.data() + pyramids.offsets[c]; // base 0-3, apex 4
-    bool onSide = false;
-    for (int axis = 0; axis < 3; ++axis) {
-      bool same = std::fabs(pyramids.points[size_t(v[0])][axis]) == 1.f;
-      for (int i = 1; i < 4; ++i)
-        same = same && pyramids.points[size_t(v[i])][axis] == pyramids.points[size_t(v[0])][axis];
-      onSide = onSide || same;
-    }
-    const std::vector<std::vector<int64_t>> cells =
-        onSide ? std::vector<std::vector<int64_t>>{{v[0], v[1], v[2], v[4]}, {v[0], v[2], v[3], v[4]}}
-               : std::vector<std::vector<int64_t>>{{v[0], v[1], v[2], v[3], v[4]}};
-    for (const std::vector<int64_t> &cell : cells) {
-      grid.connectivity.insert(grid.connectivity.end(), cell.begin(), cell.end());
-      grid.offsets.push_back(int64_t(grid.connectivity.size()));
-      grid.types.push_back(cell.size() == 4 ? uint8_t(10) : uint8_t(14));
-    }
-  }
+  UnstructuredGrid grid = makePyramidsAndTets(
+      4, kCube, [](Vec3f p) { return p.x * p.y + p.z; }, 0.3f, 5);
+  grid.fields.resize(1); // the point field
   const Mesh mesh = buildMesh(std::move(grid), "pyramids and tets");
   VolumeView volume;
   volume.mesh = makeMeshView(mesh, 0);

@@ -18,6 +18,22 @@ void addCell(UnstructuredGrid &grid, CellType type, std::initializer_list<uint32
   grid.types.push_back(uint8_t(type));
 }
 
+/// The point field "f" and the cell field "f_cell" of makeBoxGrid.
+void addFields(UnstructuredGrid &grid, const std::function<float(Vec3f)> &field) {
+  ScalarField pointField{"f", Centering::Point, {}};
+  for (const Vec3f &p : grid.points)
+    pointField.values.push_back(field(p));
+  ScalarField cellField{"f_cell", Centering::Cell, {}};
+  for (size_t cell = 0; cell + 1 < grid.offsets.size(); ++cell) {
+    Vec3f centroid{};
+    const auto first = size_t(grid.offsets[cell]), last = size_t(grid.offsets[cell + 1]);
+    for (size_t v = first; v < last; ++v)
+      centroid = centroid + grid.points[size_t(grid.connectivity[v])];
+    cellField.values.push_back(field(centroid / float(last - first)));
+  }
+  grid.fields = {std::move(pointField), std::move(cellField)};
+}
+
 } // namespace
 
 UnstructuredGrid makeBoxGrid(CellType type, int n, const Box3f &box, const std::function<float(Vec3f)> &field,
@@ -79,18 +95,35 @@ UnstructuredGrid makeBoxGrid(CellType type, int n, const Box3f &box, const std::
         }
       }
 
-  ScalarField pointField{"f", Centering::Point, {}};
-  for (const Vec3f &p : grid.points)
-    pointField.values.push_back(field(p));
-  ScalarField cellField{"f_cell", Centering::Cell, {}};
-  for (size_t cell = 0; cell + 1 < grid.offsets.size(); ++cell) {
-    Vec3f centroid{};
-    const auto first = size_t(grid.offsets[cell]), last = size_t(grid.offsets[cell + 1]);
-    for (size_t v = first; v < last; ++v)
-      centroid = centroid + grid.points[size_t(grid.connectivity[v])];
-    cellField.values.push_back(field(centroid / float(last - first)));
+  addFields(grid, field);
+  return grid;
+}
+
+UnstructuredGrid makePyramidsAndTets(int n, const Box3f &box, const std::function<float(Vec3f)> &field,
+                                     float jitter, unsigned seed) {
+  const UnstructuredGrid pyramids = makeBoxGrid(CellType::Pyramid, n, box, field, jitter, seed);
+  UnstructuredGrid grid;
+  grid.points = pyramids.points;
+  grid.offsets.push_back(0);
+  for (size_t c = 0; c + 1 < pyramids.offsets.size(); ++c) {
+    const int64_t *v = pyramids.connectivity.data() + pyramids.offsets[c]; // base 0-3, apex 4
+    const auto id = [&](int i) { return uint32_t(v[i]); };
+    bool onSide = false;
+    for (int axis = 0; axis < 3; ++axis) {
+      const float side = grid.points[id(0)][axis];
+      bool same = side == box.lower[axis] || side == box.upper[axis];
+      for (int i = 1; i < 4; ++i)
+        same = same && grid.points[id(i)][axis] == side;
+      onSide = onSide || same;
+    }
+    if (onSide) {
+      addCell(grid, CellType::Tetra, {id(0), id(1), id(2), id(4)});
+      addCell(grid, CellType::Tetra, {id(0), id(2), id(3), id(4)});
+    } else {
+      addCell(grid, CellType::Pyramid, {id(0), id(1), id(2), id(3), id(4)});
+    }
   }
-  grid.fields = {std::move(pointField), std::move(cellField)};
+  addFields(grid, field);
   return grid;
 }
 

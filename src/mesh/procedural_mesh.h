@@ -15,4 +15,9 @@ namespace uvr {
 UnstructuredGrid makeBoxGrid(CellType type, int n, const Box3f &box, const std::function<float(Vec3f)> &field,
                              float jitter = 0.f, unsigned seed = 1);
 
+/// makeBoxGrid's lattice of pyramids whose pyramids on the box's sides are each cut into two tets: tets,
+/// pyramids and the triangles they share.
+UnstructuredGrid makePyramidsAndTets(int n, const Box3f &box, const std::function<float(Vec3f)> &field,
+                                     float jitter = 0.f, unsigned seed = 1);
+
 } // namespace uvr
