@@ -203,7 +203,8 @@ public:
   }
 
   /// Whether t lies past where the skipping modes march the ray: beyond its last boundary crossing, or where
-  /// that is not known, beyond the mesh bounds. No cell holds a point there.
+  /// that is not known, beyond the mesh bounds. Only a boundary cell bulging past the triangles the
+  /// crossings were found on can hold a point there.
   UVR_HOST_DEVICE bool pastMesh(float t) const { return skip_ && t > tStop_; }
   /// Whether the ray leaves the mesh and enters it again: grid points may then lie in a gap (pastGap).
   UVR_HOST_DEVICE bool hasGaps() const { return gaps_; }
