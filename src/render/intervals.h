@@ -202,10 +202,10 @@ public:
                         : adaptiveStepSize(settings_.s1, settings_.s2, settings_.p, sigma));
   }
 
-  /// Whether t lies past where the skipping modes march the ray: beyond its last boundary crossing, or where
-  /// that is not known, beyond the mesh bounds. Only a boundary cell bulging past the triangles the
-  /// crossings were found on can hold a point there.
-  UVR_HOST_DEVICE bool pastMesh(float t) const { return skip_ && t > tStop_; }
+  /// Whether t lies past the ray's last boundary crossing, where the skipping modes know it: only a boundary
+  /// cell bulging past the triangles the crossings were found on can hold a point there. (Not the end of
+  /// the march, which a piece's region or the ray's limit may set inside the mesh.)
+  UVR_HOST_DEVICE bool pastMesh(float t) const { return skip_ && t > crossings_.last + margin_; }
   /// Whether the ray leaves the mesh and enters it again: grid points may then lie in a gap (pastGap).
   UVR_HOST_DEVICE bool hasGaps() const { return gaps_; }
   /// Where the march goes on from grid point t: past the gap in the mesh that holds t, if one does, else t;
