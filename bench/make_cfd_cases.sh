@@ -14,7 +14,8 @@
 # turbineSiting for 4 processes). On the 2-core development machine: windAroundBuildings 193 s, turbineSiting
 # 56 s (20 and 7 minutes while 3 builds ran). windAroundBuildings: 185,237 cells (171,484 hexahedra, 1,102
 # prisms, 12,651 polyhedra), 218,801 points; turbineSiting: 120,246 cells (107,146 hexahedra, 750 prisms,
-# 12,350 polyhedra), 144,990 points. Writes OUT_DIR/CASE/ (the case, its logs) and OUT_DIR/CASE_{poly,decomp}.vtu (18-30 MB each).
+# 12,350 polyhedra), 144,990 points. Writes OUT_DIR/CASE/ (the case, its logs) and
+# OUT_DIR/CASE_{poly,decomp}.vtu (18-30 MB each).
 set -euo pipefail
 
 here="$(cd "$(dirname "$0")" && pwd)"
