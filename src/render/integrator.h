@@ -105,8 +105,8 @@ struct RayMarch : ShadeState<kShade || kIso>, IsoState<kIso> {
   }
 
   /// Samples [ta, tb) every `step`, rounded to whole grid spacings; false once the ray is opaque. Not forced
-  /// inline: called from two places (reference, and the partitions' traversal), the host keeps one copy,
-  /// which was faster than two.
+  /// inline: called from two places (the intervals' traversal, and finish), the host keeps one copy, which
+  /// was faster than two.
   UVR_HOST_DEVICE bool interval(float ta, float tb, float step) {
     const SampleGrid &grid = intervals.grid();
     const float spacing = grid.spacing;
@@ -434,13 +434,7 @@ integrateRay(const SceneView &scene, const IntegratorSettings &settings, const R
                  intervals.grid().spacing);
   RayMarch<Sampling, kPreintegrate, kShade, kIso> march(scene, settings, intervals, sampler, hint, shading,
                                                         iso);
-  // Here rather than in forEach: with both calls to the march inside it, the GPU's kernel spilled more.
-  if (settings.mode == RenderMode::Reference) {
-    // The paper's reference ray marcher: the mesh bounds in one interval, at step s1.
-    march.interval(intervals.boundsEnter(), intervals.boundsExit(), intervals.grid().spacing);
-  } else {
-    intervals.forEach([&](float t0, float t1, float step) { return march.interval(t0, t1, step); });
-  }
+  intervals.forEach([&](float t0, float t1, float step) { return march.interval(t0, t1, step); });
   march.finish();
   return march.result;
 }

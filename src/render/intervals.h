@@ -124,15 +124,15 @@ UVR_HOST_DEVICE inline bool clipToRegion(const Ray &ray, const Box3f &region, fl
 class RayIntervals {
 public:
   /// The intervals of `ray`: the partitions it crosses, each at its step, and with skipping only those drawn
-  /// and only between the ray's first and last `crossings` with the mesh's boundary, where these are known.
-  /// (`reference` marches the mesh bounds instead, from boundsEnter to boundsExit.)
+  /// and only between the ray's first and last `crossings` with the mesh's boundary, where these are known;
+  /// `reference`'s one interval spans the mesh bounds.
   UVR_HOST_DEVICE RayIntervals(const SceneView &scene, const IntegratorSettings &settings, const Ray &ray,
                                const BoundaryCrossings &crossings)
       : scene_(scene), settings_(settings), ray_(ray), crossings_(crossings) {
     // No early return: the fields then take one value on every path, which leaves the GPU's kernel fewer
     // values to keep (it spilled more with returns here).
-    float tEnter;
-    bool hit = intersectBox(ray, scene.partitions.rootBounds, 0.f, ray.tMax, tEnter, tExit_);
+    float tEnter, tExit;
+    bool hit = intersectBox(ray, scene.partitions.rootBounds, 0.f, ray.tMax, tEnter, tExit);
     float gridOrigin = tEnter;
     if (!settings.clip.empty()) {
       float gridExit, clipEnter, clipExit;
@@ -140,10 +140,9 @@ public:
       const bool inClip = clipToRegion(ray, settings.clip, clipEnter, clipExit);
       hit = hit && inGrid && inClip;
       tEnter = maxf(maxf(tEnter, gridOrigin), clipEnter);
-      tExit_ = minf(tExit_, clipExit);
-      hit = hit && tEnter < tExit_;
+      tExit = minf(tExit, clipExit);
+      hit = hit && tEnter < tExit;
     }
-    tEnter_ = tEnter;
     grid_ = {gridOrigin, gridSpacing(settings, scene.partitions)};
     skip_ = skipsSpace(settings.mode);
     adaptive_ = samplesAdaptively(settings.mode);
@@ -151,13 +150,13 @@ public:
     // in a cell.
     margin_ = 0.01f * grid_.spacing;
     tStart_ = tEnter;
-    tStop_ = tExit_;
+    tStop_ = tExit;
     gaps_ = false;
     none_ = !hit;
     if (skip_) {
       none_ = none_ || crossings.none();
       tStart_ = maxf(tEnter, crossings.first - margin_);
-      tStop_ = minf(tExit_, crossings.last + margin_);
+      tStop_ = minf(tExit, crossings.last + margin_);
       gaps_ = crossings.count > 1;
     }
   }
@@ -165,9 +164,6 @@ public:
   /// Whether the ray meets no cell: it misses the mesh bounds or, skipping, every boundary face.
   UVR_HOST_DEVICE bool none() const { return none_; }
   UVR_HOST_DEVICE const SampleGrid &grid() const { return grid_; }
-  /// Where the ray enters and leaves the mesh bounds (clipped to the piece's region, if any).
-  UVR_HOST_DEVICE float boundsEnter() const { return tEnter_; }
-  UVR_HOST_DEVICE float boundsExit() const { return tExit_; }
   /// The cell the ray enters the mesh by, where the skipping modes know it; else kNoCell.
   UVR_HOST_DEVICE uint32_t entryCell() const {
     return skip_ && crossings_.face != kNoCell ? boundaryFaceCell(scene_.mesh, crossings_.face) : kNoCell;
@@ -176,7 +172,8 @@ public:
   UVR_HOST_DEVICE bool crossingsListed() const { return crossings_.keys != nullptr; }
 
   /// Calls `visit(t0, t1, step)` for each partition's interval [t0, t1) front to back, until it returns
-  /// false: the modes other than `reference`, which marches the mesh bounds as one interval at step s1.
+  /// false; `reference` marches the mesh bounds as one interval at step s1 (the root, marched whole). One
+  /// traversal for every mode: the GPU's kernel then holds one copy of the march.
   template <class Visit> UVR_HOST_DEVICE void forEach(Visit &&visit) const {
     // Skipping, the traversal culls transparent partitions and clips each interval to its shrunk box.
     traversePartitions(
@@ -188,6 +185,8 @@ public:
   /// The step through KD node `node`, a leaf or a subtree marched whole: the partition's adaptive step (paper
   /// §2.4), or s1 where that rounds to it or nothing is sampled adaptively.
   UVR_HOST_DEVICE float step(uint32_t node) const {
+    if (settings_.mode == RenderMode::Reference)
+      return grid_.spacing;
     // A whole node's partitions all take the finest step: s1 at the finest scale.
     const KdNode &n = scene_.partitions.nodes[node];
     if (n.axis != KdNode::kLeaf)
@@ -221,8 +220,10 @@ private:
   }
   /// Whether the subtree under `node` is one interval: its partitions all drawn and all taking step s1, so
   /// that marching it leaf by leaf would take the same samples at a higher cost (on a GPU, a large part of a
-  /// `full` frame).
+  /// `full` frame); in `reference`, every node.
   UVR_HOST_DEVICE bool marchedWhole(uint32_t node) const {
+    if (settings_.mode == RenderMode::Reference)
+      return true;
     const float sigma = scene_.nodeMinSigma[node];
     return sigma != kTransparentSigma && takesFinestStep(sigma) &&
            (!settings_.followMesh ||
@@ -236,7 +237,6 @@ private:
   const BoundaryCrossings &crossings_;
   bool none_;
   SampleGrid grid_;
-  float tEnter_, tExit_;
   float tStart_, tStop_; ///< the span the skipping modes march, crossings and margins included
   float margin_;
   bool skip_, adaptive_, gaps_;
