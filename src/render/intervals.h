@@ -173,7 +173,7 @@ public:
 
   /// Calls `visit(t0, t1, step)` for each partition's interval [t0, t1) front to back, until it returns
   /// false; `reference` marches the mesh bounds as one interval at step s1 (the root, marched whole). One
-  /// traversal for every mode: the GPU's kernel then holds one copy of the march.
+  /// traversal for every mode: the GPU's kernels then inline the march once for all of them.
   template <class Visit> UVR_HOST_DEVICE void forEach(Visit &&visit) const {
     // Skipping, the traversal culls transparent partitions and clips each interval to its shrunk box.
     traversePartitions(
