@@ -34,10 +34,8 @@ void addFields(UnstructuredGrid &grid, const std::function<float(Vec3f)> &field)
   grid.fields = {std::move(pointField), std::move(cellField)};
 }
 
-} // namespace
-
-UnstructuredGrid makeBoxGrid(CellType type, int n, const Box3f &box, const std::function<float(Vec3f)> &field,
-                             float jitter, unsigned seed) {
+/// makeBoxGrid's cells and points, without its fields.
+UnstructuredGrid boxLattice(CellType type, int n, const Box3f &box, float jitter, unsigned seed) {
   UnstructuredGrid grid;
   grid.offsets.push_back(0);
   const int m = n + 1;
@@ -94,14 +92,21 @@ UnstructuredGrid makeBoxGrid(CellType type, int n, const Box3f &box, const std::
         }
         }
       }
+  return grid;
+}
 
+} // namespace
+
+UnstructuredGrid makeBoxGrid(CellType type, int n, const Box3f &box, const std::function<float(Vec3f)> &field,
+                             float jitter, unsigned seed) {
+  UnstructuredGrid grid = boxLattice(type, n, box, jitter, seed);
   addFields(grid, field);
   return grid;
 }
 
 UnstructuredGrid makePyramidsAndTets(int n, const Box3f &box, const std::function<float(Vec3f)> &field,
                                      float jitter, unsigned seed) {
-  const UnstructuredGrid pyramids = makeBoxGrid(CellType::Pyramid, n, box, field, jitter, seed);
+  const UnstructuredGrid pyramids = boxLattice(CellType::Pyramid, n, box, jitter, seed);
   UnstructuredGrid grid;
   grid.points = pyramids.points;
   grid.offsets.push_back(0);
