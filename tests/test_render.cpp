@@ -385,7 +385,7 @@ TEST_P(Integrator, NoCracksAtPartitionBoundaries) {
 
 // Leaf by leaf, or with some inner nodes taken whole, the intervals a ray visits tile it front to back with
 // neither gaps nor overlaps, each the node's stretch of the ray: marching a node whole takes the samples its
-// leaves would.
+// leaves would; and the last interval, past the partitions, where one is asked for, comes once and last.
 TEST(Partitions, TraversalTilesTheRayLeafByLeafOrWithWholeNodes) {
   const Mesh mesh = buildMesh(makeBoxGrid(CellType::Tetra, 10, kBox, radial, 0.2f), "box");
   const Partitions parts = buildPartitions(makeMeshView(mesh, 0), 8);
@@ -406,16 +406,31 @@ TEST(Partitions, TraversalTilesTheRayLeafByLeafOrWithWholeNodes) {
         if (!intersectBox(ray, view.rootBounds, 0.f, INFINITY, tMin, tMax))
           continue;
         float reached = tMin;
-        traversePartitions(view, ray, tMin, tMax, nullptr, whole, [&](uint32_t node, float t0, float t1) {
-          const bool leaf = view.nodes[node].axis == KdNode::kLeaf;
-          EXPECT_TRUE(leaf || whole(node)) << name << ": node " << node;
-          wholeVisits += !leaf;
-          EXPECT_EQ(t0, reached) << name << ": pixel " << x << "," << y << ", node " << node;
-          EXPECT_LT(t0, t1);
-          reached = t1;
-          return true;
-        });
-        EXPECT_EQ(reached, tMax) << name << ": pixel " << x << "," << y;
+        int ends = 0; // the last interval, past the partitions, asked for once and visited last
+        traversePartitions(
+            view, ray, tMin, tMax, nullptr, whole,
+            [&](uint32_t node, float t0, float t1) {
+              if (node == KdNode::kNone) {
+                EXPECT_EQ(ends, 1) << name;
+                EXPECT_EQ(t0, tMax + 1.f);
+                reached = t1;
+                return true;
+              }
+              const bool leaf = view.nodes[node].axis == KdNode::kLeaf;
+              EXPECT_TRUE(leaf || whole(node)) << name << ": node " << node;
+              wholeVisits += !leaf;
+              EXPECT_EQ(t0, reached) << name << ": pixel " << x << "," << y << ", node " << node;
+              EXPECT_LT(t0, t1);
+              reached = t1;
+              return true;
+            },
+            [&](float &t0, float &t1) {
+              ++ends;
+              t0 = t1 = tMax + 1.f;
+              return ends == 1;
+            });
+        EXPECT_EQ(ends, 1) << name;
+        EXPECT_EQ(reached, tMax + 1.f) << name << ": pixel " << x << "," << y;
       }
     if (std::string(name) != "leaves")
       EXPECT_GT(wholeVisits, 0) << name;

@@ -20,6 +20,7 @@ namespace uvr {
 /// a leaf (axis == kLeaf) is partition `child`.
 struct KdNode {
   static constexpr uint32_t kLeaf = 3;
+  static constexpr uint32_t kNone = ~0u; ///< no node: what lies past the partitions
   float split = 0.f;
   uint32_t axis = kLeaf;
   uint32_t child = 0;
@@ -219,9 +220,12 @@ UVR_HOST_DEVICE void forEachLeafTouching(const KdNode *nodes, const Box3f &box, 
 /// splitting the ray at their boundaries would change nothing but the cost). With `nodeMaxOpacity` (per node,
 /// for the current transfer function), whole subtrees that are transparent or whose cells the ray misses are
 /// skipped without visiting their leaves, and each interval is clipped to its node's shrunk box (paper §2.2).
-template <typename Whole, typename Visit>
+/// After the last, where `end(t0, t1)` gives one, a last interval past the partitions, as node KdNode::kNone:
+/// from the same call of `visit`, which a GPU kernel then inlines once.
+template <typename Whole, typename Visit, typename End>
 UVR_HOST_DEVICE void traversePartitions(const PartitionsView &parts, const Ray &ray, float tMin, float tMax,
-                                        const float *nodeMaxOpacity, Whole &&whole, Visit &&visit) {
+                                        const float *nodeMaxOpacity, Whole &&whole, Visit &&visit,
+                                        End &&end) {
   constexpr int kStackSize = kMaxPartitionDepth;
   struct Entry {
     uint32_t node;
@@ -231,40 +235,51 @@ UVR_HOST_DEVICE void traversePartitions(const PartitionsView &parts, const Ray &
   int top = 0;
   uint32_t node = 0;
   float t0 = tMin, t1 = tMax;
+  bool ending = false;
   while (true) {
     float b0 = t0, b1 = t1; // what a visit gets: clipped to the node's shrunk box when culling
-    const bool culled = nodeMaxOpacity && (nodeMaxOpacity[node] <= 0.f ||
-                                           !intersectBox(ray, parts.nodeBounds[node], t0, t1, b0, b1));
-    const KdNode &n = parts.nodes[node];
-    if (!culled && n.axis != KdNode::kLeaf && !whole(node)) {
-      const int axis = int(n.axis);
-      const float origin = ray.origin[axis];
-      const float direction = ray.direction[axis];
-      // The side holding the origin comes first; a ray lying in the plane belongs to the upper side.
-      const bool originBelow = origin < n.split || (origin == n.split && direction < 0.f);
-      const uint32_t nearChild = originBelow ? n.child : n.child + 1;
-      const uint32_t farChild = originBelow ? n.child + 1 : n.child;
-      if (direction == 0.f) {
-        node = origin < n.split ? n.child : n.child + 1;
-      } else {
-        const float tSplit = (n.split - origin) * ray.invDirection[axis];
-        if (tSplit >= t1 || tSplit <= 0.f) {
-          node = nearChild;
-        } else if (tSplit <= t0) {
-          node = farChild;
+    bool culled = false;
+    if (!ending) {
+      culled = nodeMaxOpacity &&
+               (nodeMaxOpacity[node] <= 0.f || !intersectBox(ray, parts.nodeBounds[node], t0, t1, b0, b1));
+      const KdNode &n = parts.nodes[node];
+      if (!culled && n.axis != KdNode::kLeaf && !whole(node)) {
+        const int axis = int(n.axis);
+        const float origin = ray.origin[axis];
+        const float direction = ray.direction[axis];
+        // The side holding the origin comes first; a ray lying in the plane belongs to the upper side.
+        const bool originBelow = origin < n.split || (origin == n.split && direction < 0.f);
+        const uint32_t nearChild = originBelow ? n.child : n.child + 1;
+        const uint32_t farChild = originBelow ? n.child + 1 : n.child;
+        if (direction == 0.f) {
+          node = origin < n.split ? n.child : n.child + 1;
         } else {
-          if (top < kStackSize)
-            stack[top++] = {farChild, tSplit, t1};
-          node = nearChild;
-          t1 = tSplit;
+          const float tSplit = (n.split - origin) * ray.invDirection[axis];
+          if (tSplit >= t1 || tSplit <= 0.f) {
+            node = nearChild;
+          } else if (tSplit <= t0) {
+            node = farChild;
+          } else {
+            if (top < kStackSize)
+              stack[top++] = {farChild, tSplit, t1};
+            node = nearChild;
+            t1 = tSplit;
+          }
         }
+        continue;
       }
+    }
+    if ((ending || (!culled && b0 < b1)) && !visit(node, b0, b1))
+      return;
+    if (ending)
+      return;
+    if (top == 0) {
+      if (!end(t0, t1))
+        return;
+      ending = true;
+      node = KdNode::kNone;
       continue;
     }
-    if (!culled && b0 < b1 && !visit(node, b0, b1))
-      return;
-    if (top == 0)
-      return;
     --top;
     node = stack[top].node;
     t0 = stack[top].t0;

@@ -104,9 +104,7 @@ struct RayMarch : ShadeState<kShade || kIso>, IsoState<kIso> {
     return true;
   }
 
-  /// Samples [ta, tb) every `step`, rounded to whole grid spacings; false once the ray is opaque. Not forced
-  /// inline: called from two places (the intervals' traversal, and finish), the host keeps one copy, which
-  /// was faster than two.
+  /// Samples [ta, tb) every `step`, rounded to whole grid spacings; false once the ray is opaque.
   UVR_HOST_DEVICE bool interval(float ta, float tb, float step) {
     const SampleGrid &grid = intervals.grid();
     const float spacing = grid.spacing;
@@ -271,13 +269,15 @@ struct RayMarch : ShadeState<kShade || kIso>, IsoState<kIso> {
     return !opaque;
   }
 
-  /// Ends the ray, closing a pending sample's segment where the ray is not yet opaque.
-  UVR_HOST_DEVICE void finish() {
-    if (kPreintegrate && pending.valid && result.color.w < settings.terminationOpacity) {
-      // An empty interval past the segment's end: its one sample closes the segment.
-      const float t = intervals.grid().at(pending.next + 1.f);
-      interval(t, t, intervals.grid().spacing);
-    }
+  /// After the ray's last interval, the one that closes a pending sample's segment where the ray is not yet
+  /// opaque: an empty interval past the segment's end, whose one sample closes the segment. False where there
+  /// is none.
+  UVR_HOST_DEVICE bool closingInterval(float &t0, float &t1, float &step) const {
+    if (!kPreintegrate || !pending.valid || !(result.color.w < settings.terminationOpacity))
+      return false;
+    t0 = t1 = intervals.grid().at(pending.next + 1.f);
+    step = intervals.grid().spacing;
+    return true;
   }
 
 private:
@@ -434,8 +434,8 @@ integrateRay(const SceneView &scene, const IntegratorSettings &settings, const R
                  intervals.grid().spacing);
   RayMarch<Sampling, kPreintegrate, kShade, kIso> march(scene, settings, intervals, sampler, hint, shading,
                                                         iso);
-  intervals.forEach([&](float t0, float t1, float step) { return march.interval(t0, t1, step); });
-  march.finish();
+  intervals.forEach([&](float t0, float t1, float step) { return march.interval(t0, t1, step); },
+                    [&](float &t0, float &t1, float &step) { return march.closingInterval(t0, t1, step); });
   return march.result;
 }
 

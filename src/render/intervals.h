@@ -172,14 +172,19 @@ public:
   UVR_HOST_DEVICE bool crossingsListed() const { return crossings_.keys != nullptr; }
 
   /// Calls `visit(t0, t1, step)` for each partition's interval [t0, t1) front to back, until it returns
-  /// false; `reference` marches the mesh bounds as one interval at step s1 (the root, marched whole). One
-  /// traversal for every mode: the GPU's kernels then inline the march once for all of them.
-  template <class Visit> UVR_HOST_DEVICE void forEach(Visit &&visit) const {
+  /// false; `reference` marches the mesh bounds as one interval at step s1 (the root, marched whole). Then,
+  /// where `end(t0, t1, step)` gives one, for a last interval past them, from the same call. One traversal
+  /// for every mode and one call of `visit`: the GPU's kernels then inline the march once for all of them.
+  template <class Visit, class End> UVR_HOST_DEVICE void forEach(Visit &&visit, End &&end) const {
     // Skipping, the traversal culls transparent partitions and clips each interval to its shrunk box.
+    float endStep = 0.f;
     traversePartitions(
         scene_.partitions, ray_, tStart_, tStop_, skip_ ? scene_.nodeMaxOpacity : nullptr,
         [&](uint32_t node) { return marchedWhole(node); },
-        [&](uint32_t node, float t0, float t1) { return visit(t0, t1, step(node)); });
+        [&](uint32_t node, float t0, float t1) {
+          return visit(t0, t1, node == KdNode::kNone ? endStep : step(node));
+        },
+        [&](float &t0, float &t1) { return end(t0, t1, endStep); });
   }
 
   /// The step through KD node `node`, a leaf or a subtree marched whole: the partition's adaptive step (paper
