@@ -859,6 +859,52 @@ TEST_P(Integrator, PreintegrationFindsAShellThinnerThanTheStep) {
   }
 }
 
+// A cell field steps at the faces: pre-integration composites the segment that holds a step as two constant
+// pieces split where the ray crosses the face, not as a linear ramp between the two samples' values (which
+// with a sharp function puts the step at the wrong place). A slab of unit cubes (tets, hexahedra) with value
+// 1 between two with value 0, rays near the cubes' axis that cross only the slab's faces near it, steps that
+// straddle each face: the opacity is the slab's exactly.
+TEST_P(Integrator, PreintegratedCellDataStepsAtTheFaces) {
+  const Box3f box{{-2.f, -2.f, -2.f}, {2.f, 2.f, 2.f}};
+  // Opaque only for values past 0.96: a ramp from 0 to 1 would be opaque over its last 4% alone.
+  const float alpha = 0.1f;
+  ColorMap sharp;
+  sharp.rgbPoints = {0.f, 1.f, 1.f, 1.f, 1.f, 1.f, 1.f, 1.f};
+  sharp.opacityPoints = {0.f,   0.f,   0.5f, 0.f, 0.95f, 0.f,   0.5f, 0.f,
+                         0.96f, alpha, 0.5f, 0.f, 1.f,   alpha, 0.5f, 0.f};
+  // Along x through the cubes of y, z in [0, 1]: a Kuhn tet's faces inside a cube lie where x - x0 equals y
+  // or z, at least 0.3 from the cube's faces for y, z in [0.3, 0.7]; farther than a step.
+  Camera camera;
+  camera.eye = {-10.f, 0.5f, 0.5f};
+  camera.at = {0.f, 0.5f, 0.5f};
+  camera.up = {0.f, 0.f, 1.f};
+  camera.fovy = 2.2f;
+  const float kappa = -std::log(1.f - alpha) / 0.1f;
+  for (CellType type : {CellType::Tetra, CellType::Hexahedron}) {
+    const Mesh mesh = buildMesh(
+        makeBoxGrid(type, 4, box, [](Vec3f p) { return p.x > 0.f && p.x < 1.f ? 1.f : 0.f; }), "slab");
+    Renderer renderer(mesh, mesh.findField("f_cell"), 64);
+    renderer.setTransferFunction(TransferFunction(sharp, 0.f, 1.f));
+    // Steps of 0.23: the faces at x = 0 and 1 fall within a segment, not on a sample.
+    for (RenderMode mode : {RenderMode::Reference, RenderMode::Full}) {
+      RenderSettings settings = settingsFor(mode, 0.23f);
+      settings.integrator.preintegrate = true;
+      const Frame frame = renderer.render(camera, settings);
+      const CameraView view = makeCameraView(camera, settings.width, settings.height);
+      float worst = 0.f;
+      for (int y = 0; y < settings.height; ++y)
+        for (int x = 0; x < settings.width; ++x) {
+          const Ray ray = view.ray(x, y);
+          const float t0 = -ray.origin.x * ray.invDirection.x, t1 = (1.f - ray.origin.x) * ray.invDirection.x;
+          const float expected = 1.f - std::exp(-kappa * (t1 - t0) * length(ray.direction));
+          worst = std::max(worst, std::fabs(frame.opacity[size_t(y * settings.width + x)] - expected));
+        }
+      // A linear ramp is off by about 0.02 here.
+      EXPECT_LT(worst, 1e-4f) << modeName(mode) << " " << int(type);
+    }
+  }
+}
+
 // Each partition's step scale is its cells' size against the mesh's, as a power of two: cubes of half the
 // edge (an eighth of the volume, 3 * 256 apart in log2) halve it.
 TEST(Partitions, StepScalesAreTheCellSizeRatioAsAPowerOfTwo) {

@@ -77,9 +77,11 @@ struct RayMarch : ShadeState<kShade || kIso>, IsoState<kIso> {
   RayResult result = {};
   bool first = true;
   /// Pre-integrating, the last sample: its segment reaches to grid point `next`, and is integrated to the
-  /// value there (the next sample's or, where the march would not sample there, one taken to close it).
+  /// value there (the next sample's or, where the march would not sample there, one taken to close it). For
+  /// cell data, `exit`: how far past the sample the ray leaves its cell (NaN where unknown), where the
+  /// segment's value steps to the next one.
   struct Pending {
-    float value = 0.f, k = 0.f, next = 0.f;
+    float value = 0.f, k = 0.f, next = 0.f, exit = 0.f;
     bool valid = false;
   } pending;
 
@@ -222,7 +224,9 @@ struct RayMarch : ShadeState<kShade || kIso>, IsoState<kIso> {
       }
       const bool last = !(grid.at(kNext) < tb);
       if constexpr (kPreintegrate) {
-        pending = {value, k, last ? kEnd : kNext, true};
+        // Recorded now: the sampler moves on.
+        const float exit = scene.mesh.cellCentered ? sampler.at.exitT(inHex()) - t : 0.f;
+        pending = {value, k, last ? kEnd : kNext, exit, true};
         if constexpr (kLit) {
           if (shadesVolume())
             this->pendingGradient = sampler.pointVectorAt(this->shading->gradients, t);
@@ -281,18 +285,39 @@ struct RayMarch : ShadeState<kShade || kIso>, IsoState<kIso> {
   }
 
 private:
-  /// Composites the pending segment, its value running linearly to `endValue` at its end.
+  /// Composites the pending segment, its value running linearly to `endValue` at its end. Cell data steps
+  /// instead, from the pending value to `endValue` halfway between where the ray leaves the pending sample's
+  /// cell and where it enters the end's (cells between, which neither sample lies in, count half to each);
+  /// where one crossing is unknown, at the other, where both are, at the segment's middle.
   UVR_HOST_DEVICE void closeSegment(Vec4f &color, float endValue, float spacing) {
     pending.valid = false;
     if (!drawsVolume())
       return;
-    Vec4f c =
-        scene.tf.integrate(pending.value, endValue, (pending.next - pending.k) * spacing, settings.unit);
+    const float length = (pending.next - pending.k) * spacing;
+    Vec4f c;
+    if (!scene.mesh.cellCentered) {
+      c = scene.tf.integrate(pending.value, endValue, length, settings.unit);
+    } else {
+      float split = length;
+      // Where the values differ, the segment ends in another cell: the sampler's now.
+      if (endValue != pending.value) {
+        const float exit = pending.exit, entry = sampler.at.entryT(inHex()) - intervals.grid().at(pending.k);
+        split = 0.5f * ((exit == exit ? exit : entry) + (entry == entry ? entry : exit));
+        split = split == split ? clampf(split, 0.f, length) : 0.5f * length;
+      }
+      c = scene.tf.step(pending.value, endValue, split, length - split, settings.unit);
+    }
     if constexpr (kLit) {
       if (shadesVolume())
         c = shade(c, this->pendingGradient);
     }
     compositeBehind(color, c);
+  }
+
+  /// Whether the sampler's cell is a hexahedron.
+  UVR_HOST_DEVICE bool inHex() const {
+    const MeshView &mesh = scene.mesh;
+    return sampler.cell() >= mesh.tetCount + mesh.pyramidCount + mesh.wedgeCount;
   }
 
   /// Takes the field at `t` (`value`; `inside`: whether a cell holds the point), a point past the last one
