@@ -71,43 +71,28 @@ struct RayCell {
   }
   /// Where `affine`: the field at `tNext` on the ray, as `cell` interpolates it.
   UVR_HOST_DEVICE float valueAt(float tNext) const { return value + (tNext - t) * dvalue; }
-  /// Where the ray leaves `cell`, ahead of a point in it: for a tet exactly (the first weight to fall to
-  /// zero), for a hexahedron (`hex`) about (the first parametric coordinate, carried along the ray by its
-  /// rate, to reach 0 or 1); NaN where unknown (another cell, or no weights).
-  UVR_HOST_DEVICE float exitT(bool hex) const {
+  /// Where the ray crosses `cell`'s boundary ahead of a point in it (`ahead`: where it leaves) or behind it
+  /// (where it enters): for a tet exactly (the first weight ahead to fall to zero, the last behind to rise
+  /// from it), for a hexahedron (`hex`) about (the parametric coordinates, carried along the ray by their
+  /// rate, reaching 0 or 1); NaN where unknown (another cell, or no weights).
+  UVR_HOST_DEVICE float crossingT(bool hex, bool ahead) const {
+    // Behind, the nearest crossing of the ray reversed: the same minimum over the quotients negated.
+    const float sign = ahead ? 1.f : -1.f;
     if (affine) {
       // Four independent quotients, then their minimum: the host's compiler divides them at once.
       float s[4];
       for (int i = 0; i < 4; ++i)
-        s[i] = -w[i] / dw[i];
+        s[i] = -sign * w[i] / dw[i];
       for (int i = 0; i < 4; ++i)
-        s[i] = dw[i] < 0.f ? s[i] : INFINITY;
-      return t + minf(minf(s[0], s[1]), minf(s[2], s[3]));
+        s[i] = sign * dw[i] < 0.f ? s[i] : INFINITY;
+      return t + sign * minf(minf(s[0], s[1]), minf(s[2], s[3]));
     }
     if (!parametric || !hex)
       return NAN;
     float s = INFINITY;
     for (int i = 0; i < 3; ++i)
-      s = dw[i] != 0.f ? minf(s, ((dw[i] < 0.f ? 0.f : 1.f) - w[i]) / dw[i]) : s;
-    return t + s;
-  }
-  /// Where the ray enters `cell`, behind a point in it: as exitT, the last weight to rise from zero (or
-  /// coordinate to come into [0, 1]).
-  UVR_HOST_DEVICE float entryT(bool hex) const {
-    if (affine) {
-      float s[4];
-      for (int i = 0; i < 4; ++i)
-        s[i] = -w[i] / dw[i];
-      for (int i = 0; i < 4; ++i)
-        s[i] = dw[i] > 0.f ? s[i] : -INFINITY;
-      return t + maxf(maxf(s[0], s[1]), maxf(s[2], s[3]));
-    }
-    if (!parametric || !hex)
-      return NAN;
-    float s = -INFINITY;
-    for (int i = 0; i < 3; ++i)
-      s = dw[i] != 0.f ? maxf(s, ((dw[i] > 0.f ? 0.f : 1.f) - w[i]) / dw[i]) : s;
-    return t + s;
+      s = dw[i] != 0.f ? minf(s, sign * ((sign * dw[i] < 0.f ? 0.f : 1.f) - w[i]) / dw[i]) : s;
+    return t + sign * s;
   }
 };
 

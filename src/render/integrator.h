@@ -225,7 +225,7 @@ struct RayMarch : ShadeState<kShade || kIso>, IsoState<kIso> {
       const bool last = !(grid.at(kNext) < tb);
       if constexpr (kPreintegrate) {
         // Recorded now: the sampler moves on.
-        const float exit = scene.mesh.cellCentered ? sampler.at.exitT(inHex()) - t : 0.f;
+        const float exit = scene.mesh.cellCentered ? sampler.at.crossingT(inHex(), true) - t : 0.f;
         pending = {value, k, last ? kEnd : kNext, exit, true};
         if constexpr (kLit) {
           if (shadesVolume())
@@ -301,7 +301,8 @@ private:
       float split = length;
       // Where the values differ, the segment ends in another cell: the sampler's now.
       if (endValue != pending.value) {
-        const float exit = pending.exit, entry = sampler.at.entryT(inHex()) - intervals.grid().at(pending.k);
+        const float exit = pending.exit,
+                    entry = sampler.at.crossingT(inHex(), false) - intervals.grid().at(pending.k);
         split = 0.5f * ((exit == exit ? exit : entry) + (entry == entry ? entry : exit));
         split = split == split ? clampf(split, 0.f, length) : 0.5f * length;
       }

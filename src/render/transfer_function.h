@@ -32,22 +32,14 @@ struct TransferFunctionView {
   const Vec4f *extinctionIntegral = nullptr;
 
   /// Colour and opacity (per opacity unit distance) at `value`, clamped to the range; NaN is transparent.
-  UVR_HOST_DEVICE Vec4f sample(float value) const {
-    if (value != value)
-      return {};
-    const float x = clampf((value - valueMin) * scale, 0.f, float(size - 1));
-    const int i = x >= float(size - 1) ? size - 2 : int(x);
-    const float f = x - float(i);
-    const Vec4f a = table[i], b = table[i + 1];
-    return {a.x + (b.x - a.x) * f, a.y + (b.y - a.y) * f, a.z + (b.z - a.z) * f, a.w + (b.w - a.w) * f};
-  }
+  UVR_HOST_DEVICE Vec4f sample(float value) const { return lookup(table, value); }
 
   /// Colour (rgb) and opacity of a ray segment over which the scalar is `a` for `lengthA`, then `b` for
   /// `lengthB` (a cell field's step): the optical depth of both pieces from the extinction at their values
   /// (interpolated in the table), and, as integrate, the colour the extinction-weighted mean, without the
   /// attenuation within the segment. NaN is transparent.
   UVR_HOST_DEVICE Vec4f step(float a, float b, float lengthA, float lengthB, float unit) const {
-    const Vec4f ea = extinctionAt(a), eb = extinctionAt(b);
+    const Vec4f ea = lookup(extinction, a), eb = lookup(extinction, b);
     const Vec4f sum = {ea.x * lengthA + eb.x * lengthB, ea.y * lengthA + eb.y * lengthB,
                        ea.z * lengthA + eb.z * lengthB, ea.w * lengthA + eb.w * lengthB};
     if (!(sum.w > 0.f))
@@ -82,16 +74,16 @@ struct TransferFunctionView {
   }
 
 private:
-  /// The extinction entry (tau r, tau g, tau b, tau) interpolated to `value`; zero for NaN.
-  UVR_HOST_DEVICE Vec4f extinctionAt(float value) const {
+  /// A table's entries (`table`'s, or `extinction`'s) interpolated to `value`, clamped to the range; zero for
+  /// NaN.
+  UVR_HOST_DEVICE Vec4f lookup(const Vec4f *entries, float value) const {
     if (value != value)
       return {};
     const float x = clampf((value - valueMin) * scale, 0.f, float(size - 1));
     const int i = x >= float(size - 1) ? size - 2 : int(x);
     const float f = x - float(i);
-    const Vec4f lo = extinction[i], hi = extinction[i + 1];
-    return {lo.x + (hi.x - lo.x) * f, lo.y + (hi.y - lo.y) * f, lo.z + (hi.z - lo.z) * f,
-            lo.w + (hi.w - lo.w) * f};
+    const Vec4f a = entries[i], b = entries[i + 1];
+    return {a.x + (b.x - a.x) * f, a.y + (b.y - a.y) * f, a.z + (b.z - a.z) * f, a.w + (b.w - a.w) * f};
   }
 
   /// The integrals of the extinction entries from entry 0 to table position x; beyond the table the end
