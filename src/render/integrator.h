@@ -276,11 +276,10 @@ struct RayMarch : ShadeState<kShade || kIso>, IsoState<kIso> {
   /// After the ray's last interval, the one that closes a pending sample's segment where the ray is not yet
   /// opaque: an empty interval past the segment's end, whose one sample closes the segment. False where there
   /// is none.
-  UVR_HOST_DEVICE bool closingInterval(float &t0, float &t1, float &step) const {
+  UVR_HOST_DEVICE bool closingInterval(float &t0, float &t1) const {
     if (!kPreintegrate || !pending.valid || !(result.color.w < settings.terminationOpacity))
       return false;
     t0 = t1 = intervals.grid().at(pending.next + 1.f);
-    step = intervals.grid().spacing;
     return true;
   }
 
@@ -316,10 +315,7 @@ private:
   }
 
   /// Whether the sampler's cell is a hexahedron.
-  UVR_HOST_DEVICE bool inHex() const {
-    const MeshView &mesh = scene.mesh;
-    return sampler.cell() >= mesh.tetCount + mesh.pyramidCount + mesh.wedgeCount;
-  }
+  UVR_HOST_DEVICE bool inHex() const { return cellType(scene.mesh, sampler.cell()) == CellType::Hexahedron; }
 
   /// Takes the field at `t` (`value`; `inside`: whether a cell holds the point), a point past the last one
   /// known, and composites the surfaces it crosses on the way from there, nearest first: in the order of
@@ -461,7 +457,7 @@ integrateRay(const SceneView &scene, const IntegratorSettings &settings, const R
   RayMarch<Sampling, kPreintegrate, kShade, kIso> march(scene, settings, intervals, sampler, hint, shading,
                                                         iso);
   intervals.forEach([&](float t0, float t1, float step) { return march.interval(t0, t1, step); },
-                    [&](float &t0, float &t1, float &step) { return march.closingInterval(t0, t1, step); });
+                    [&](float &t0, float &t1) { return march.closingInterval(t0, t1); });
   return march.result;
 }
 

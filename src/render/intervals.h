@@ -173,24 +173,22 @@ public:
 
   /// Calls `visit(t0, t1, step)` for each partition's interval [t0, t1) front to back, until it returns
   /// false; `reference` marches the mesh bounds as one interval at step s1 (the root, marched whole). Then,
-  /// where `end(t0, t1, step)` gives one, for a last interval past them, from the same call. One traversal
-  /// for every mode and one call of `visit`: the GPU's kernels then inline the march once for all of them.
+  /// where `end(t0, t1)` gives one, for a last interval past them at one grid spacing, from the same call.
+  /// One traversal for every mode and one call of `visit`: the GPU's kernels then inline the march once for
+  /// all of them.
   template <class Visit, class End> UVR_HOST_DEVICE void forEach(Visit &&visit, End &&end) const {
     // Skipping, the traversal culls transparent partitions and clips each interval to its shrunk box.
-    float endStep = 0.f;
     traversePartitions(
         scene_.partitions, ray_, tStart_, tStop_, skip_ ? scene_.nodeMaxOpacity : nullptr,
         [&](uint32_t node) { return marchedWhole(node); },
-        [&](uint32_t node, float t0, float t1) {
-          return visit(t0, t1, node == KdNode::kNone ? endStep : step(node));
-        },
-        [&](float &t0, float &t1) { return end(t0, t1, endStep); });
+        [&](uint32_t node, float t0, float t1) { return visit(t0, t1, step(node)); }, end);
   }
 
   /// The step through KD node `node`, a leaf or a subtree marched whole: the partition's adaptive step (paper
-  /// §2.4), or s1 where that rounds to it or nothing is sampled adaptively.
+  /// §2.4), or s1 where that rounds to it or nothing is sampled adaptively; one grid spacing past the
+  /// partitions (KdNode::kNone).
   UVR_HOST_DEVICE float step(uint32_t node) const {
-    if (settings_.mode == RenderMode::Reference)
+    if (settings_.mode == RenderMode::Reference || node == KdNode::kNone)
       return grid_.spacing;
     // A whole node's partitions all take the finest step: s1 at the finest scale.
     const KdNode &n = scene_.partitions.nodes[node];
