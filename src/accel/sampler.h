@@ -25,6 +25,8 @@ struct DeviceSampling {
   static constexpr bool kTetRecords = false; ///< read the per-tet records where the volume has them
   static constexpr bool kCellWalks = false;  ///< walk across other cells than tets, given their adjacency
   static constexpr bool kTrail = false;      ///< follow a CellTrail from ray to ray
+  /// Pre-integrating a cell field, visit the cells between two samples where they could show (RayMarch).
+  static constexpr bool kCellsBetweenSamples = false;
 };
 
 /// The GPU's sampling of a mesh with other cells than tets whose adjacency it holds: walks across them too.
@@ -34,11 +36,13 @@ struct DeviceCellWalkSampling : DeviceSampling {
 };
 
 /// The host's sampling: all of the above. The GPU keeps no records (64 bytes per tet); its neighbouring rays
-/// run at once, so there is no previous ray to learn from.
+/// run at once, so there is no previous ray to learn from; and a second place that locates samples would
+/// double its pre-integrating kernels' code.
 struct HostSampling {
   static constexpr bool kTetRecords = true;
   static constexpr bool kCellWalks = true;
   static constexpr bool kTrail = true;
+  static constexpr bool kCellsBetweenSamples = true;
 };
 
 /// The cell a ray's last sample lies in. For a tet, also the sample's barycentric weights and field with

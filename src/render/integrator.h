@@ -79,10 +79,11 @@ struct RayMarch : ShadeState<kShade || kIso>, IsoState<kIso> {
   /// Pre-integrating, the last sample: its segment reaches to grid point `next`, and is integrated to the
   /// value there (the next sample's or, where the march would not sample there, one taken to close it). For
   /// cell data, `exit`: how far past the sample the ray leaves its cell (NaN where unknown), where the
-  /// segment's value steps to the next one.
+  /// segment's value steps to the next one; `cell`: that cell.
   struct Pending {
     float value = 0.f, k = 0.f, next = 0.f, exit = 0.f;
     bool valid = false;
+    uint32_t cell = kNoCell;
   } pending;
 
   UVR_HOST_DEVICE RayMarch(const SceneView &scene, const IntegratorSettings &settings,
@@ -188,7 +189,7 @@ struct RayMarch : ShadeState<kShade || kIso>, IsoState<kIso> {
         // kernel inlines the integration once.
         if (pending.valid) {
           const bool joined = inside && (closing || k == pending.next);
-          closeSegment(color, joined ? value : pending.value, spacing);
+          closeSegment(color, samples, joined ? value : pending.value, spacing);
         }
       }
       if constexpr (kIso) {
@@ -226,7 +227,8 @@ struct RayMarch : ShadeState<kShade || kIso>, IsoState<kIso> {
       if constexpr (kPreintegrate) {
         // Recorded now: the sampler moves on.
         const float exit = scene.mesh.cellCentered ? sampler.at.crossingT(inHex(), true) - t : 0.f;
-        pending = {value, k, last ? kEnd : kNext, exit, true};
+        const uint32_t cell = Sampling::kCellsBetweenSamples ? sampler.cell() : kNoCell; // for crossCells
+        pending = {value, k, last ? kEnd : kNext, exit, true, cell};
         if constexpr (kLit) {
           if (shadesVolume())
             this->pendingGradient = sampler.pointVectorAt(this->shading->gradients, t);
@@ -287,8 +289,9 @@ private:
   /// Composites the pending segment, its value running linearly to `endValue` at its end. Cell data steps
   /// instead, from the pending value to `endValue` halfway between where the ray leaves the pending sample's
   /// cell and where it enters the end's (cells between, which neither sample lies in, count half to each);
-  /// where one crossing is unknown, at the other, where both are, at the segment's middle.
-  UVR_HOST_DEVICE void closeSegment(Vec4f &color, float endValue, float spacing) {
+  /// where one crossing is unknown, at the other, where both are, at the segment's middle. Where the policy
+  /// affords it, the cells between that could show are visited first (crossCells).
+  UVR_HOST_DEVICE void closeSegment(Vec4f &color, uint32_t &samples, float endValue, float spacing) {
     pending.valid = false;
     if (!drawsVolume())
       return;
@@ -297,21 +300,64 @@ private:
     if (!scene.mesh.cellCentered) {
       c = scene.tf.integrate(pending.value, endValue, length, settings.unit);
     } else {
-      float split = length;
+      // The last piece: `value` from `from` to where the ray leaves its cell, `exit`, then `endValue`.
+      float from = 0.f, value = pending.value, split = length;
       // Where the values differ, the segment ends in another cell: the sampler's now.
       if (endValue != pending.value) {
-        const float exit = pending.exit,
-                    entry = sampler.at.crossingT(inHex(), false) - intervals.grid().at(pending.k);
+        float exit = pending.exit;
+        const float entry = sampler.at.crossingT(inHex(), false) - intervals.grid().at(pending.k);
+        if constexpr (Sampling::kCellsBetweenSamples)
+          crossCells(color, samples, endValue, entry, spacing, from, value, exit);
         split = 0.5f * ((exit == exit ? exit : entry) + (entry == entry ? entry : exit));
-        split = split == split ? clampf(split, 0.f, length) : 0.5f * length;
+        split = split == split ? clampf(split, from, length) : 0.5f * (from + length);
       }
-      c = scene.tf.step(pending.value, endValue, split, length - split, settings.unit);
+      c = scene.tf.step(value, endValue, split - from, length - split, settings.unit);
     }
+    compositeSegment(color, c);
+  }
+
+  UVR_HOST_DEVICE void compositeSegment(Vec4f &color, Vec4f c) {
     if constexpr (kLit) {
       if (shadesVolume())
         c = shade(c, this->pendingGradient);
     }
     compositeBehind(color, c);
+  }
+
+  /// A cell field's segment whose two samples lie in cells apart, `exit` and `entry` past its start: where
+  /// its value over that stretch, either sample's, could change its opacity by more than
+  /// kCellStepTolerance (bounded by the extinctions' difference times the stretch: no exp), the cells
+  /// between are found one by one just past the last one's exit, and each one's piece composited, up to the
+  /// end's cell or one whose exit is unknown. `from`, `value` and `exit` then describe the last piece; the
+  /// sampler is back at the segment's end.
+  UVR_HOST_DEVICE void crossCells(Vec4f &color, uint32_t &samples, float endValue, float entry, float spacing,
+                                  float &from, float &value, float &exit) {
+    constexpr float kCellStepTolerance = 0.1f;
+    constexpr int kMostCells = 64;
+    constexpr int kWalk = 8;             // steps of each walk: the next cell is a neighbour
+    const float nudge = 1e-3f * spacing; // past a face, within float precision of t
+    const float stretch = entry - exit;
+    if (!(stretch > nudge) ||
+        !(fabsf(scene.tf.extinctionAt(value) - scene.tf.extinctionAt(endValue)) * stretch >
+          kCellStepTolerance * settings.unit))
+      return;
+    const float tStart = intervals.grid().at(pending.k);
+    sampler.enter(pending.cell);
+    for (int cells = 0; exit < entry - nudge && cells < kMostCells; ++cells) {
+      float next;
+      ++samples;
+      if (!sampler.probe(tStart + exit + nudge, kWalk, false, next))
+        break;
+      const float nextExit = sampler.at.crossingT(inHex(), true) - tStart;
+      if (!(nextExit > exit))
+        break;
+      compositeSegment(color, scene.tf.step(value, value, exit - from, 0.f, settings.unit));
+      from = exit;
+      value = next;
+      exit = nextExit;
+    }
+    float atEnd;
+    sampler.probe(intervals.grid().at(pending.next), kWalk, false, atEnd);
   }
 
   /// Whether the sampler's cell is a hexahedron.

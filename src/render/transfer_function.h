@@ -34,6 +34,9 @@ struct TransferFunctionView {
   /// Colour and opacity (per opacity unit distance) at `value`, clamped to the range; NaN is transparent.
   UVR_HOST_DEVICE Vec4f sample(float value) const { return lookup(table, value); }
 
+  /// Extinction (-ln(1 - opacity), per opacity unit distance) at `value`, as step takes it.
+  UVR_HOST_DEVICE float extinctionAt(float value) const { return lookup(extinction, value).w; }
+
   /// Colour (rgb) and opacity of a ray segment over which the scalar is `a` for `lengthA`, then `b` for
   /// `lengthB` (a cell field's step): the optical depth of both pieces from the extinction at their values
   /// (interpolated in the table), and, as integrate, the colour the extinction-weighted mean, without the
