@@ -67,31 +67,48 @@ __device__ inline RadixNode radixNode(const uint32_t *codes, int64_t cells, int6
   return {first, last, uint32_t(gamma)};
 }
 
-/// Whether internal node i stays an inner node after collapsing, as 1 or 0 (its rank once scanned).
-__global__ void keptKernel(const uint32_t *codes, int64_t cells, uint32_t *kept) {
+/// Which internal nodes stay inner nodes after collapsing, one bit each, and their ranks among the kept ones:
+/// per 32-bit word of bits, the kept nodes in the words before it. A rank then costs a popcount, and the
+/// whole a sixteenth of a rank per node (the lean layout's build peaks here).
+struct KeptNodes {
+  const uint32_t *bits;
+  const uint32_t *before; ///< one entry more than words: the last holds the kept count
+
+  __device__ bool kept(int64_t i) const { return bits[i >> 5] >> (i & 31) & 1u; }
+  __device__ uint32_t rank(int64_t i) const {
+    return before[i >> 5] + uint32_t(__popc(bits[i >> 5] & ((1u << (i & 31)) - 1u)));
+  }
+};
+
+/// The kept bits of internal nodes, a warp's 32 to a word, and each word's count (its rank once scanned).
+/// Every thread of a warp takes part in the vote: the grid is whole warps.
+__global__ void keptKernel(const uint32_t *codes, int64_t cells, uint32_t *bits, uint32_t *counts) {
   const int64_t i = int64_t(globalIndex());
-  if (i >= cells - 1)
-    return;
-  const RadixNode node = radixNode(codes, cells, i);
-  kept[i] = keptInner(node.first, node.last);
+  bool kept = false;
+  if (i < cells - 1) {
+    const RadixNode node = radixNode(codes, cells, i);
+    kept = keptInner(node.first, node.last);
+  }
+  const uint32_t word = __ballot_sync(0xffffffffu, kept);
+  if ((threadIdx.x & 31u) == 0 && i < cells - 1) {
+    bits[i >> 5] = word;
+    counts[i >> 5] = uint32_t(__popc(word));
+  }
 }
 
-/// Whether internal node i is kept, from the exclusive scan of the flags (one entry more than nodes).
-__device__ inline bool isKept(const uint32_t *keptRank, int64_t i) { return keptRank[i + 1] != keptRank[i]; }
-
 /// Per kept inner node, its children's records (boxes aside) and, for kept children, where they are stored.
-__global__ void collapsedTreeKernel(const uint32_t *codes, int64_t cells, const uint32_t *keptRank,
-                                    BvhNode *nodes, uint32_t *parentSlot) {
+__global__ void collapsedTreeKernel(const uint32_t *codes, int64_t cells, KeptNodes kept, BvhNode *nodes,
+                                    uint32_t *parentSlot) {
   const int64_t i = int64_t(globalIndex());
-  if (i >= cells - 1 || !isKept(keptRank, i))
+  if (i >= cells - 1 || !kept.kept(i))
     return;
   const RadixNode node = radixNode(codes, cells, i);
   const uint32_t ranges[2][2] = {{node.first, node.split}, {node.split + 1, node.last}};
   for (int side = 0; side < 2; ++side) {
-    const uint32_t slot = 1 + 2 * keptRank[i] + uint32_t(side), first = ranges[side][0],
+    const uint32_t slot = 1 + 2 * kept.rank(i) + uint32_t(side), first = ranges[side][0],
                    last = ranges[side][1];
     if (keptInner(first, last)) {
-      const uint32_t child = keptRank[side == 0 ? node.split : node.split + 1];
+      const uint32_t child = kept.rank(side == 0 ? node.split : node.split + 1);
       nodes[slot] = {Box3f{}, 1 + 2 * child, 0};
       parentSlot[child] = slot;
     } else {
@@ -107,13 +124,12 @@ __device__ inline Box3f freshBounds(const BvhNode &node) {
 }
 
 /// The boxes, from the leaves up: the second of a node's two children to arrive computes its box.
-__global__ void collapsedBoundsKernel(MeshView mesh, const uint32_t *cellIds, int64_t cells,
-                                      const uint32_t *keptRank, BvhNode *nodes, const uint32_t *parentSlot,
-                                      uint32_t *arrivals) {
+__global__ void collapsedBoundsKernel(MeshView mesh, const uint32_t *cellIds, int64_t cells, KeptNodes kept,
+                                      BvhNode *nodes, const uint32_t *parentSlot, uint32_t *arrivals) {
   const int64_t i = int64_t(globalIndex());
-  if (i >= cells - 1 || !isKept(keptRank, i))
+  if (i >= cells - 1 || !kept.kept(i))
     return;
-  const uint32_t self = keptRank[i];
+  const uint32_t self = kept.rank(i);
   uint32_t leaves = 0;
   for (uint32_t slot = 1 + 2 * self; slot <= 2 + 2 * self; ++slot) {
     const BvhNode child = nodes[slot]; // written by the previous kernel
@@ -162,30 +178,35 @@ void DeviceBuilder::bvh() {
     return;
   }
   const int64_t inner = int64_t(cells_) - 1;
-  // The kept flags, scanned in place into ranks; the entry past the last node ends as the kept count.
-  DeviceBuffer<uint32_t> keptRank;
-  keptRank.resize(uint64_t(inner) + 1);
-  UVR_CUDA_CHECK(cudaMemset(keptRank.data() + inner, 0, sizeof(uint32_t)));
-  keptKernel<<<blocksFor(inner, kBlock), kBlock>>>(codes.data(), int64_t(cells_), keptRank.data());
+  const uint64_t words = (uint64_t(inner) + 31) / 32;
+  DeviceBuffer<uint32_t> keptBits, keptBefore;
+  keptBits.resize(words);
+  keptBefore.resize(words + 1);
+  UVR_CUDA_CHECK(cudaMemset(keptBefore.data() + words, 0, sizeof(uint32_t)));
+  static_assert(kBlock % 32 == 0, "keptKernel votes in whole warps");
+  keptKernel<<<blocksFor(inner, kBlock), kBlock>>>(codes.data(), int64_t(cells_), keptBits.data(),
+                                                   keptBefore.data());
   UVR_CUDA_CHECK(cudaGetLastError());
   scratch_.run([&](void *storage, size_t &bytes) {
-    return cub::DeviceScan::ExclusiveSum(storage, bytes, keptRank.data(), keptRank.data(), inner + 1);
+    return cub::DeviceScan::ExclusiveSum(storage, bytes, keptBefore.data(), keptBefore.data(),
+                                         int64_t(words) + 1);
   });
-  const uint32_t keptCount = downloadOne(keptRank.data() + inner);
+  const KeptNodes kept{keptBits.data(), keptBefore.data()};
+  const uint32_t keptCount = downloadOne(keptBefore.data() + words);
   out_.bvh.nodes.resize(1 + 2 * uint64_t(keptCount));
   const BvhNode root{Box3f{}, 1, 0}; // its box comes from below
   UVR_CUDA_CHECK(cudaMemcpy(out_.bvh.nodes.data(), &root, sizeof root, cudaMemcpyHostToDevice));
   DeviceBuffer<uint32_t> parentSlot, arrivals;
   parentSlot.resize(keptCount);
-  arrivals.resize(keptCount);
-  UVR_CUDA_CHECK(cudaMemset(arrivals.data(), 0, arrivals.bytes()));
-  collapsedTreeKernel<<<blocksFor(inner, kBlock), kBlock>>>(codes.data(), int64_t(cells_), keptRank.data(),
+  collapsedTreeKernel<<<blocksFor(inner, kBlock), kBlock>>>(codes.data(), int64_t(cells_), kept,
                                                             out_.bvh.nodes.data(), parentSlot.data());
   UVR_CUDA_CHECK(cudaGetLastError());
   codes.release();
+  arrivals.resize(keptCount);
+  UVR_CUDA_CHECK(cudaMemset(arrivals.data(), 0, arrivals.bytes()));
   collapsedBoundsKernel<<<blocksFor(inner, kBlock), kBlock>>>(mesh_, out_.bvh.cellIds.data(), int64_t(cells_),
-                                                              keptRank.data(), out_.bvh.nodes.data(),
-                                                              parentSlot.data(), arrivals.data());
+                                                              kept, out_.bvh.nodes.data(), parentSlot.data(),
+                                                              arrivals.data());
 }
 
 } // namespace uvr::gpu_build

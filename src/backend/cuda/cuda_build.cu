@@ -82,10 +82,27 @@ void DeviceBuilder::bounds() {
   meshBounds_ = downloadOne(bounds.data()).box();
 }
 
-void DeviceBuilder::sortCells(DeviceBuffer<uint32_t> &keys, int bits, DeviceBuffer<uint32_t> &order) {
+void DeviceBuilder::identityOrder(DeviceBuffer<uint32_t> &order) {
   order.resize(cells_);
   indicesKernel<<<cellBlocks(), kBlock>>>(cells_, order.data());
   UVR_CUDA_CHECK(cudaGetLastError());
+}
+
+void DeviceBuilder::sortByDigit(DeviceBuffer<uint8_t> &digits, DeviceBuffer<uint8_t> &digitsOther,
+                                DeviceBuffer<uint32_t> &order, DeviceBuffer<uint32_t> &orderOther) {
+  cub::DoubleBuffer<uint8_t> sortedDigits(digits.data(), digitsOther.data());
+  cub::DoubleBuffer<uint32_t> sortedOrder(order.data(), orderOther.data());
+  scratch_.run([&](void *storage, size_t &bytes) {
+    return cub::DeviceRadixSort::SortPairs(storage, bytes, sortedDigits, sortedOrder, int64_t(cells_), 0, 8);
+  });
+  if (sortedDigits.Current() != digits.data())
+    digits.swap(digitsOther);
+  if (sortedOrder.Current() != order.data())
+    order.swap(orderOther);
+}
+
+void DeviceBuilder::sortCells(DeviceBuffer<uint32_t> &keys, int bits, DeviceBuffer<uint32_t> &order) {
+  identityOrder(order);
   DeviceBuffer<uint32_t> keysOther, orderOther;
   keysOther.resize(cells_);
   orderOther.resize(cells_);

@@ -108,6 +108,27 @@ private:
   /// `keys` is left sorted. Sorts in place between two buffers each, so that the sort takes no temporary
   /// storage of its own beyond a few histograms.
   void sortCells(DeviceBuffer<uint32_t> &keys, int bits, DeviceBuffer<uint32_t> &order);
+  /// As sortCells, by a 32-bit key per cell that `digitsOf(order, digit, digits)` writes a byte at a time
+  /// (digit 0 the least significant) for the cells in `order`'s order: four stable passes from the order by
+  /// index give sortCells' order in 10 bytes a cell rather than 16, the key recomputed each pass.
+  template <class DigitsOf> void sortCellsByDigits(DigitsOf digitsOf, DeviceBuffer<uint32_t> &order) {
+    identityOrder(order);
+    DeviceBuffer<uint32_t> orderOther;
+    DeviceBuffer<uint8_t> digits, digitsOther;
+    orderOther.resize(cells_);
+    digits.resize(cells_);
+    digitsOther.resize(cells_);
+    for (int digit = 0; digit < 4; ++digit) {
+      digitsOf(order.data(), digit, digits.data());
+      UVR_CUDA_CHECK(cudaGetLastError());
+      sortByDigit(digits, digitsOther, order, orderOther);
+    }
+  }
+  /// The cells' indices in order, into `order`.
+  void identityOrder(DeviceBuffer<uint32_t> &order);
+  /// One stable pass of sortCellsByDigits: `order` reordered by `digits`, each with a spare to sort between.
+  void sortByDigit(DeviceBuffer<uint8_t> &digits, DeviceBuffer<uint8_t> &digitsOther,
+                   DeviceBuffer<uint32_t> &order, DeviceBuffer<uint32_t> &orderOther);
 
   MeshView mesh_;
   uint64_t cells_, pointCount_;

@@ -6,6 +6,8 @@
 
 #include <cub/device/device_scan.cuh>
 
+#include <iterator>
+
 namespace uvr::gpu_build {
 namespace {
 
@@ -53,13 +55,27 @@ __device__ bool holdsCentroid(const Box3f &box, Vec3f p) {
 /// A piece's tree holds the cells whose centroids lie in its root: the others are sorted past them all.
 constexpr uint32_t kOutsideKey = 0xffffffffu; // no finite centroid's ordered bits
 
+/// The key cells are sorted by along `axis`: their centroids' ordered bits, those outside a piece's tree
+/// last.
+__device__ inline uint32_t axisKey(const MeshView &mesh, uint64_t c, int axis, bool piece,
+                                   const Box3f &treeRoot) {
+  const Vec3f centroid = cellCentroid(mesh, c);
+  return piece && !holdsCentroid(treeRoot, centroid) ? kOutsideKey : orderedBits(centroid[axis]);
+}
+
 __global__ void axisKeysKernel(MeshView mesh, uint64_t cells, int axis, bool piece, Box3f treeRoot,
                                uint32_t *keys) {
   const uint64_t c = globalIndex();
-  if (c >= cells)
-    return;
-  const Vec3f centroid = cellCentroid(mesh, c);
-  keys[c] = piece && !holdsCentroid(treeRoot, centroid) ? kOutsideKey : orderedBits(centroid[axis]);
+  if (c < cells)
+    keys[c] = axisKey(mesh, c, axis, piece, treeRoot);
+}
+
+/// Byte `digit` of the axis key of the cell at each position of `order`.
+__global__ void axisDigitsKernel(MeshView mesh, uint64_t cells, int axis, bool piece, Box3f treeRoot,
+                                 const uint32_t *order, int digit, uint8_t *digits) {
+  const uint64_t p = globalIndex();
+  if (p < cells)
+    digits[p] = uint8_t(axisKey(mesh, order[p], axis, piece, treeRoot) >> (8 * digit));
 }
 
 __global__ void insideKernel(MeshView mesh, uint64_t cells, Box3f treeRoot, uint32_t *inside) {
@@ -156,31 +172,13 @@ __global__ void sideKernel(uint64_t cells, const LevelNode *level, uint32_t coun
   above[lists.axis[decisions[s].axis][p]] = level[s].goesAbove(p);
 }
 
-__global__ void aboveFlagsKernel(uint64_t cells, const LevelNode *level, uint32_t count,
-                                 const uint32_t *splits, const uint32_t *list, const uint8_t *above,
-                                 uint32_t *flags) {
-  const uint64_t p = globalIndex();
-  if (p >= cells)
-    return;
-  const uint32_t s = nodeAt(level, count, p);
-  flags[p] = s != kSettled && splits[s] ? above[list[p]] : 0u;
-}
-
-/// The stable partition of one list: below before above within each splitting node, order kept on each side.
-__global__ void partitionListKernel(uint64_t cells, const LevelNode *level, uint32_t count,
-                                    const uint32_t *splits, const uint32_t *list, const uint8_t *above,
-                                    const uint32_t *aboveBefore, uint32_t *out) {
-  const uint64_t p = globalIndex();
-  if (p >= cells)
-    return;
-  const uint32_t s = nodeAt(level, count, p), cell = list[p];
-  if (s == kSettled || !splits[s]) {
-    out[p] = cell;
-    return;
-  }
-  const LevelNode node = level[s];
-  const uint32_t ones = aboveBefore[p] - aboveBefore[node.start];
-  out[above[cell] ? node.start + node.below + ones : uint32_t(p) - ones] = cell;
+/// Per node of a level, the cells that go above its split (none where it does not split); scanned, the
+/// cells going above in the nodes before it.
+__global__ void aboveCountsKernel(const LevelNode *level, uint32_t count, const uint32_t *splits,
+                                  uint32_t *counts) {
+  const uint64_t s = globalIndex();
+  if (s < count)
+    counts[s] = splits[s] ? level[s].count - level[s].below : 0u;
 }
 
 /// What a partition gathers from the cells whose boxes touch it, as ordered bits.
@@ -276,6 +274,91 @@ __global__ void nodeBoundsKernel(uint32_t first, uint32_t count, const KdNode *n
 
 } // namespace
 
+// Outside the anonymous namespace: the scan instantiates only some of the iterators' members.
+
+/// The stable partition of one list (below before above within each splitting node, order kept on each
+/// side), one position at a time as the scan of the sides' flags reaches it: `aboveBefore`, the cells going
+/// above before position p in the list, is consumed where the scan writes it, so the counts take no buffer.
+struct ListPartition {
+  const LevelNode *level;
+  uint32_t count;
+  const uint32_t *splits, *list, *aboveInNodesBefore;
+  const uint8_t *above;
+  uint32_t *out;
+
+  /// The flag scanned at position p: whether its cell goes above.
+  __device__ uint32_t flag(uint64_t p) const {
+    const uint32_t s = nodeAt(level, count, p);
+    return s != kSettled && splits[s] ? above[list[p]] : 0u;
+  }
+  __device__ void place(uint64_t p, uint32_t aboveBefore) const {
+    const uint32_t s = nodeAt(level, count, p), cell = list[p];
+    if (s == kSettled || !splits[s]) {
+      out[p] = cell;
+      return;
+    }
+    const LevelNode node = level[s];
+    const uint32_t ones = aboveBefore - aboveInNodesBefore[s];
+    out[above[cell] ? node.start + node.below + ones : uint32_t(p) - ones] = cell;
+  }
+};
+
+/// The scan's input: each position's flag, computed where read.
+struct FlagIterator {
+  using iterator_category = std::random_access_iterator_tag;
+  using value_type = uint32_t;
+  using difference_type = int64_t;
+  using pointer = const uint32_t *;
+  using reference = uint32_t;
+  ListPartition partition;
+  int64_t at = 0;
+
+  __device__ uint32_t operator*() const { return partition.flag(uint64_t(at)); }
+  __device__ uint32_t operator[](int64_t i) const { return partition.flag(uint64_t(at + i)); }
+  __host__ __device__ FlagIterator operator+(int64_t i) const { return {partition, at + i}; }
+  __host__ __device__ FlagIterator &operator+=(int64_t i) {
+    at += i;
+    return *this;
+  }
+  __host__ __device__ FlagIterator &operator++() {
+    ++at;
+    return *this;
+  }
+  __host__ __device__ int64_t operator-(const FlagIterator &other) const { return at - other.at; }
+};
+
+/// The scan's output: writing position p's count places its cell (ListPartition::place).
+struct PlaceIterator {
+  struct Slot {
+    ListPartition partition;
+    int64_t at;
+    __device__ const Slot &operator=(uint32_t aboveBefore) const {
+      partition.place(uint64_t(at), aboveBefore);
+      return *this;
+    }
+  };
+  using iterator_category = std::random_access_iterator_tag;
+  using value_type = void;
+  using difference_type = int64_t;
+  using pointer = void;
+  using reference = Slot;
+  ListPartition partition;
+  int64_t at = 0;
+
+  __device__ Slot operator*() const { return {partition, at}; }
+  __device__ Slot operator[](int64_t i) const { return {partition, at + i}; }
+  __host__ __device__ PlaceIterator operator+(int64_t i) const { return {partition, at + i}; }
+  __host__ __device__ PlaceIterator &operator+=(int64_t i) {
+    at += i;
+    return *this;
+  }
+  __host__ __device__ PlaceIterator &operator++() {
+    ++at;
+    return *this;
+  }
+  __host__ __device__ int64_t operator-(const PlaceIterator &other) const { return at - other.at; }
+};
+
 void DeviceBuilder::partitions() {
   // A piece's tree starts from its region's box, as the whole mesh's tree reaches it, over the cells whose
   // centroids lie there (as the host builds it).
@@ -286,10 +369,20 @@ void DeviceBuilder::partitions() {
   out_.partitions.rootBounds = root;
 
   // The three sorted lists; a spare list that each partitioned list is written to, swapped with it; the
-  // sides of the cells; the count of cells going above before each position.
-  DeviceBuffer<uint32_t> lists[3], spare, aboveBefore;
+  // sides of the cells.
+  DeviceBuffer<uint32_t> lists[3], spare;
   DeviceBuffer<uint8_t> above;
-  {
+  if (lean_) {
+    // A byte of the key at a time, recomputed each pass: 10 bytes a cell rather than sortCells' 16, where
+    // the lean layout's build would peak.
+    for (int axis = 0; axis < 3; ++axis)
+      sortCellsByDigits(
+          [&](const uint32_t *order, int digit, uint8_t *digits) {
+            axisDigitsKernel<<<cellBlocks(), kBlock>>>(mesh_, cells_, axis, piece, treeRoot, order, digit,
+                                                       digits);
+          },
+          lists[axis]);
+  } else {
     DeviceBuffer<uint32_t> keys;
     keys.resize(cells_);
     for (int axis = 0; axis < 3; ++axis) {
@@ -299,18 +392,16 @@ void DeviceBuilder::partitions() {
     }
   }
   spare.resize(cells_);
-  aboveBefore.resize(cells_);
   above.resize(cells_);
   // The cells outside a piece's tree, last in every list, lie in no node: they take no part.
   uint64_t inTree = cells_;
   if (piece && cells_ > 0) {
-    insideKernel<<<cellBlocks(), kBlock>>>(mesh_, cells_, treeRoot, aboveBefore.data());
+    insideKernel<<<cellBlocks(), kBlock>>>(mesh_, cells_, treeRoot, spare.data());
     UVR_CUDA_CHECK(cudaGetLastError());
     scratch_.run([&](void *storage, size_t &bytes) {
-      return cub::DeviceScan::InclusiveSum(storage, bytes, aboveBefore.data(), aboveBefore.data(),
-                                           int64_t(cells_));
+      return cub::DeviceScan::InclusiveSum(storage, bytes, spare.data(), spare.data(), int64_t(cells_));
     });
-    inTree = downloadOne(aboveBefore.data() + cells_ - 1);
+    inTree = downloadOne(spare.data() + cells_ - 1);
   }
 
   DeviceBuffer<LevelNode> level, next;
@@ -318,7 +409,7 @@ void DeviceBuilder::partitions() {
   level.upload(&rootNode, 1);
   DeviceBuffer<KdNode> nodes, decisions;
   DeviceBuffer<Box3f> leafSpace;
-  DeviceBuffer<uint32_t> splits, splitRank;
+  DeviceBuffer<uint32_t> splits, splitRank, aboveInNodesBefore;
   std::vector<std::pair<uint32_t, uint32_t>> levels; // first node and count per level
   uint32_t levelBase = 0, leaves = 0, count = 1;
   for (int depth = 0; count > 0; ++depth) {
@@ -349,19 +440,22 @@ void DeviceBuilder::partitions() {
       sideKernel<<<cellBlocks(), kBlock>>>(cells_, level.data(), count, decisions.data(), splits.data(),
                                            sorted, above.data());
       UVR_CUDA_CHECK(cudaGetLastError());
+      aboveInNodesBefore.grow(count, 0);
+      aboveCountsKernel<<<blocksFor(count, kBlock), kBlock>>>(level.data(), count, splits.data(),
+                                                              aboveInNodesBefore.data());
+      UVR_CUDA_CHECK(cudaGetLastError());
+      scratch_.run([&](void *storage, size_t &bytes) {
+        return cub::DeviceScan::ExclusiveSum(storage, bytes, aboveInNodesBefore.data(),
+                                             aboveInNodesBefore.data(), int64_t(count));
+      });
       for (int axis = 0; axis < 3; ++axis) {
-        // The flags, scanned in place.
-        aboveFlagsKernel<<<cellBlocks(), kBlock>>>(cells_, level.data(), count, splits.data(),
-                                                   lists[axis].data(), above.data(), aboveBefore.data());
-        UVR_CUDA_CHECK(cudaGetLastError());
+        const ListPartition partition{
+            level.data(), count,       splits.data(), lists[axis].data(), aboveInNodesBefore.data(),
+            above.data(), spare.data()};
         scratch_.run([&](void *storage, size_t &bytes) {
-          return cub::DeviceScan::ExclusiveSum(storage, bytes, aboveBefore.data(), aboveBefore.data(),
-                                               int64_t(cells_));
+          return cub::DeviceScan::ExclusiveSum(storage, bytes, FlagIterator{partition},
+                                               PlaceIterator{partition}, int64_t(cells_));
         });
-        partitionListKernel<<<cellBlocks(), kBlock>>>(cells_, level.data(), count, splits.data(),
-                                                      lists[axis].data(), above.data(), aboveBefore.data(),
-                                                      spare.data());
-        UVR_CUDA_CHECK(cudaGetLastError());
         lists[axis].swap(spare);
       }
     }
@@ -371,7 +465,6 @@ void DeviceBuilder::partitions() {
   for (auto &list : lists)
     list.release();
   spare.release();
-  aboveBefore.release();
   above.release();
 
   const uint32_t nodeCount = levelBase;
