@@ -859,6 +859,39 @@ TEST_P(Integrator, PreintegrationFindsAShellThinnerThanTheStep) {
   }
 }
 
+namespace {
+
+/// A camera 10 units down the x axis looking along +x through (y, z), with rays a few degrees apart.
+Camera lookingAlongX(float y, float z) {
+  Camera camera;
+  camera.eye = {-10.f, y, z};
+  camera.at = {0.f, y, z};
+  camera.up = {0.f, 0.f, 1.f};
+  camera.fovy = 2.2f;
+  return camera;
+}
+
+/// The largest difference over a frame between each pixel's opacity and 1 - exp(-depth(distanceTo)), where
+/// distanceTo(x) is how far along the pixel's ray (in world units) the plane at `x` lies.
+template <class Depth>
+float worstOpacityError(const Frame &frame, const RenderSettings &settings, const Camera &camera,
+                        Depth depth) {
+  const CameraView view = makeCameraView(camera, settings.width, settings.height);
+  float worst = 0.f;
+  for (int y = 0; y < settings.height; ++y)
+    for (int x = 0; x < settings.width; ++x) {
+      const Ray ray = view.ray(x, y);
+      auto distanceTo = [&](float px) {
+        return (px - ray.origin.x) * ray.invDirection.x * length(ray.direction);
+      };
+      const float expected = 1.f - std::exp(-depth(distanceTo));
+      worst = std::max(worst, std::fabs(frame.opacity[size_t(y * settings.width + x)] - expected));
+    }
+  return worst;
+}
+
+} // namespace
+
 // A cell field steps at the faces: pre-integration composites the segment that holds a step as two constant
 // pieces split where the ray crosses the face, not as a linear ramp between the two samples' values (which
 // with a sharp function puts the step at the wrong place). A slab of unit cubes (tets, hexahedra) with value
@@ -874,11 +907,7 @@ TEST_P(Integrator, PreintegratedCellDataStepsAtTheFaces) {
                          0.96f, alpha, 0.5f, 0.f, 1.f,   alpha, 0.5f, 0.f};
   // Along x through the cubes of y, z in [0, 1]: a Kuhn tet's faces inside a cube lie where x - x0 equals y
   // or z, at least 0.3 from the cube's faces for y, z in [0.3, 0.7]; farther than a step.
-  Camera camera;
-  camera.eye = {-10.f, 0.5f, 0.5f};
-  camera.at = {0.f, 0.5f, 0.5f};
-  camera.up = {0.f, 0.f, 1.f};
-  camera.fovy = 2.2f;
+  const Camera camera = lookingAlongX(0.5f, 0.5f);
   const float kappa = -std::log(1.f - alpha) / 0.1f;
   for (CellType type : {CellType::Tetra, CellType::Hexahedron}) {
     const Mesh mesh = buildMesh(
@@ -889,16 +918,9 @@ TEST_P(Integrator, PreintegratedCellDataStepsAtTheFaces) {
     for (RenderMode mode : {RenderMode::Reference, RenderMode::Full}) {
       RenderSettings settings = settingsFor(mode, 0.23f);
       settings.integrator.preintegrate = true;
-      const Frame frame = renderer.render(camera, settings);
-      const CameraView view = makeCameraView(camera, settings.width, settings.height);
-      float worst = 0.f;
-      for (int y = 0; y < settings.height; ++y)
-        for (int x = 0; x < settings.width; ++x) {
-          const Ray ray = view.ray(x, y);
-          const float t0 = -ray.origin.x * ray.invDirection.x, t1 = (1.f - ray.origin.x) * ray.invDirection.x;
-          const float expected = 1.f - std::exp(-kappa * (t1 - t0) * length(ray.direction));
-          worst = std::max(worst, std::fabs(frame.opacity[size_t(y * settings.width + x)] - expected));
-        }
+      const float worst =
+          worstOpacityError(renderer.render(camera, settings), settings, camera,
+                            [&](auto distanceTo) { return kappa * (distanceTo(1.f) - distanceTo(0.f)); });
       // A linear ramp is off by about 0.02 here.
       EXPECT_LT(worst, 1e-4f) << modeName(mode) << " " << int(type);
     }
@@ -920,11 +942,7 @@ TEST_P(Integrator, PreintegratedCellDataVisitsTheCellsBetweenSamples) {
   map.rgbPoints = {0.f, 1.f, 1.f, 1.f, 1.f, 1.f, 1.f, 1.f};
   map.opacityPoints = {0.f,  0.f,         0.5f, 0.f, 0.4f, 0.f,       0.5f, 0.f,
                        0.5f, beyondAlpha, 0.5f, 0.f, 1.f,  slabAlpha, 0.5f, 0.f};
-  Camera camera;
-  camera.eye = {-10.f, 0.4f, 0.6f};
-  camera.at = {0.f, 0.4f, 0.6f};
-  camera.up = {0.f, 0.f, 1.f};
-  camera.fovy = 2.2f;
+  const Camera camera = lookingAlongX(0.4f, 0.6f);
   const float kappaSlab = -std::log(1.f - slabAlpha) / 0.1f,
               kappaBeyond = -std::log(1.f - beyondAlpha) / 0.1f;
   for (CellType type : {CellType::Tetra, CellType::Hexahedron}) {
@@ -938,19 +956,11 @@ TEST_P(Integrator, PreintegratedCellDataVisitsTheCellsBetweenSamples) {
       // Steps of 0.7, nearly three cells: the slab mostly lies between two samples.
       RenderSettings settings = settingsFor(mode, 0.7f);
       settings.integrator.preintegrate = true;
-      const Frame frame = renderer.render(camera, settings);
-      const CameraView view = makeCameraView(camera, settings.width, settings.height);
-      float worst = 0.f;
-      for (int y = 0; y < settings.height; ++y)
-        for (int x = 0; x < settings.width; ++x) {
-          const Ray ray = view.ray(x, y);
-          auto tAt = [&](float px) { return (px - ray.origin.x) * ray.invDirection.x; };
-          const float scale = length(ray.direction);
-          const float depth =
-              kappaSlab * (tAt(0.25f) - tAt(0.f)) * scale + kappaBeyond * (tAt(1.f) - tAt(0.25f)) * scale;
-          worst = std::max(
-              worst, std::fabs(frame.opacity[size_t(y * settings.width + x)] - (1.f - std::exp(-depth))));
-        }
+      const float worst =
+          worstOpacityError(renderer.render(camera, settings), settings, camera, [&](auto distanceTo) {
+            return kappaSlab * (distanceTo(0.25f) - distanceTo(0.f)) +
+                   kappaBeyond * (distanceTo(1.f) - distanceTo(0.25f));
+          });
       // Splitting the segments that hold the slab is off by about 0.24 here.
       EXPECT_LT(worst, 1e-3f) << modeName(mode) << " " << int(type);
     }
