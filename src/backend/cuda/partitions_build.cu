@@ -7,6 +7,7 @@
 #include <cub/device/device_scan.cuh>
 
 #include <iterator>
+#include <utility>
 
 namespace uvr::gpu_build {
 namespace {
@@ -303,60 +304,51 @@ struct ListPartition {
   }
 };
 
-/// The scan's input: each position's flag, computed where read.
-struct FlagIterator {
+/// A random-access iterator over a list's positions whose element at p is `at(p)`: a value computed where
+/// read, or a slot that acts where written.
+template <class At, class Value> struct PositionIterator {
   using iterator_category = std::random_access_iterator_tag;
-  using value_type = uint32_t;
+  using value_type = Value;
   using difference_type = int64_t;
-  using pointer = const uint32_t *;
-  using reference = uint32_t;
-  ListPartition partition;
-  int64_t at = 0;
+  using pointer = void;
+  using reference = decltype(std::declval<const At &>()(int64_t()));
+  At at;
+  int64_t position = 0;
 
-  __device__ uint32_t operator*() const { return partition.flag(uint64_t(at)); }
-  __device__ uint32_t operator[](int64_t i) const { return partition.flag(uint64_t(at + i)); }
-  __host__ __device__ FlagIterator operator+(int64_t i) const { return {partition, at + i}; }
-  __host__ __device__ FlagIterator &operator+=(int64_t i) {
-    at += i;
+  __device__ reference operator*() const { return at(position); }
+  __device__ reference operator[](int64_t i) const { return at(position + i); }
+  __host__ __device__ PositionIterator operator+(int64_t i) const { return {at, position + i}; }
+  __host__ __device__ PositionIterator &operator+=(int64_t i) {
+    position += i;
     return *this;
   }
-  __host__ __device__ FlagIterator &operator++() {
-    ++at;
+  __host__ __device__ PositionIterator &operator++() {
+    ++position;
     return *this;
   }
-  __host__ __device__ int64_t operator-(const FlagIterator &other) const { return at - other.at; }
+  __host__ __device__ int64_t operator-(const PositionIterator &other) const {
+    return position - other.position;
+  }
+};
+
+/// The scan's input: each position's flag.
+struct FlagAt {
+  ListPartition partition;
+  __device__ uint32_t operator()(int64_t p) const { return partition.flag(uint64_t(p)); }
 };
 
 /// The scan's output: writing position p's count places its cell (ListPartition::place).
-struct PlaceIterator {
+struct PlaceAt {
   struct Slot {
     ListPartition partition;
-    int64_t at;
+    int64_t p;
     __device__ const Slot &operator=(uint32_t aboveBefore) const {
-      partition.place(uint64_t(at), aboveBefore);
+      partition.place(uint64_t(p), aboveBefore);
       return *this;
     }
   };
-  using iterator_category = std::random_access_iterator_tag;
-  using value_type = void;
-  using difference_type = int64_t;
-  using pointer = void;
-  using reference = Slot;
   ListPartition partition;
-  int64_t at = 0;
-
-  __device__ Slot operator*() const { return {partition, at}; }
-  __device__ Slot operator[](int64_t i) const { return {partition, at + i}; }
-  __host__ __device__ PlaceIterator operator+(int64_t i) const { return {partition, at + i}; }
-  __host__ __device__ PlaceIterator &operator+=(int64_t i) {
-    at += i;
-    return *this;
-  }
-  __host__ __device__ PlaceIterator &operator++() {
-    ++at;
-    return *this;
-  }
-  __host__ __device__ int64_t operator-(const PlaceIterator &other) const { return at - other.at; }
+  __device__ Slot operator()(int64_t p) const { return {partition, p}; }
 };
 
 void DeviceBuilder::partitions() {
@@ -453,8 +445,9 @@ void DeviceBuilder::partitions() {
             level.data(), count,       splits.data(), lists[axis].data(), aboveInNodesBefore.data(),
             above.data(), spare.data()};
         scratch_.run([&](void *storage, size_t &bytes) {
-          return cub::DeviceScan::ExclusiveSum(storage, bytes, FlagIterator{partition},
-                                               PlaceIterator{partition}, int64_t(cells_));
+          return cub::DeviceScan::ExclusiveSum(storage, bytes,
+                                               PositionIterator<FlagAt, uint32_t>{{partition}},
+                                               PositionIterator<PlaceAt, void>{{partition}}, int64_t(cells_));
         });
         lists[axis].swap(spare);
       }
