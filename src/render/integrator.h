@@ -316,6 +316,7 @@ private:
     compositeSegment(color, c);
   }
 
+  /// Composites a segment's colour behind `color`, lit by the pending sample's gradient where shading.
   UVR_HOST_DEVICE void compositeSegment(Vec4f &color, Vec4f c) {
     if constexpr (kLit) {
       if (shadesVolume())
