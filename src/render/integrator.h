@@ -304,10 +304,11 @@ private:
       float from = 0.f, value = pending.value, split = length;
       // Where the values differ, the segment ends in another cell: the sampler's now.
       if (endValue != pending.value) {
+        const float tStart = intervals.grid().at(pending.k);
         float exit = pending.exit;
-        const float entry = sampler.at.crossingT(inHex(), false) - intervals.grid().at(pending.k);
+        const float entry = sampler.at.crossingT(inHex(), false) - tStart;
         if constexpr (Sampling::kCellsBetweenSamples)
-          crossCells(color, samples, endValue, entry, spacing, from, value, exit);
+          crossCells(color, samples, endValue, tStart, entry, spacing, from, value, exit);
         split = 0.5f * ((exit == exit ? exit : entry) + (entry == entry ? entry : exit));
         split = split == split ? clampf(split, from, length) : 0.5f * (from + length);
       }
@@ -325,14 +326,14 @@ private:
     compositeBehind(color, c);
   }
 
-  /// A cell field's segment whose two samples lie in cells apart, `exit` and `entry` past its start: where
-  /// its value over that stretch, either sample's, could change its opacity by more than
+  /// A cell field's segment from `tStart` whose two samples lie in cells apart, `exit` and `entry` past its
+  /// start: where its value over that stretch, either sample's, could change its opacity by more than
   /// kCellStepTolerance (bounded by the extinctions' difference times the stretch: no exp), the cells
   /// between are found one by one just past the last one's exit, and each one's piece composited, up to the
   /// end's cell or one whose exit is unknown. `from`, `value` and `exit` then describe the last piece; the
   /// sampler is back at the segment's end.
-  UVR_HOST_DEVICE void crossCells(Vec4f &color, uint32_t &samples, float endValue, float entry, float spacing,
-                                  float &from, float &value, float &exit) {
+  UVR_HOST_DEVICE void crossCells(Vec4f &color, uint32_t &samples, float endValue, float tStart, float entry,
+                                  float spacing, float &from, float &value, float &exit) {
     constexpr float kCellStepTolerance = 0.1f;
     constexpr int kMostCells = 64;
     constexpr int kWalk = 8;             // steps of each walk: the next cell is a neighbour
@@ -342,7 +343,6 @@ private:
         !(fabsf(scene.tf.extinctionAt(value) - scene.tf.extinctionAt(endValue)) * stretch >
           kCellStepTolerance * settings.unit))
       return;
-    const float tStart = intervals.grid().at(pending.k);
     sampler.enter(pending.cell);
     for (int cells = 0; exit < entry - nudge && cells < kMostCells; ++cells) {
       float next;
