@@ -27,6 +27,8 @@ struct DeviceSampling {
   static constexpr bool kTrail = false;      ///< follow a CellTrail from ray to ray
   /// Pre-integrating a cell field, visit the cells between two samples where they could show (RayMarch).
   static constexpr bool kCellsBetweenSamples = false;
+  /// Drawing isosurfaces, locate the samples too by the sampler's one out-of-line probe (RayMarch::locate).
+  static constexpr bool kIsoSamplesByProbe = true;
 };
 
 /// The GPU's sampling of a mesh with other cells than tets whose adjacency it holds: walks across them too.
@@ -43,6 +45,7 @@ struct HostSampling {
   static constexpr bool kCellWalks = true;
   static constexpr bool kTrail = true;
   static constexpr bool kCellsBetweenSamples = true;
+  static constexpr bool kIsoSamplesByProbe = false;
 };
 
 /// The cell a ray's last sample lies in. For a tet, also the sample's barycentric weights and field with
@@ -477,9 +480,12 @@ template <class Sampling> struct RaySampler {
   }
 
   /// The field at `t` into `value`, anywhere along the ray (a point between samples: the sampler moves to
-  /// its cell, and the trail is left as it is); false where no cell holds it.
-  UVR_HOST_DEVICE bool probe(float t, int walkSteps, bool far, float &value) {
-    return locateSample<Sampling>(volume, skipEmpty, clearVoxels, ray, t, walkSteps, far, kNoCell, at, value);
+  /// its cell, and the trail is left as it is); false where no cell holds it. `pastMesh` as locateSample
+  /// takes it. Out of line on the GPU: the isosurfaces' search probes at several places.
+  UVR_HOST_DEVICE UVR_DEVICE_NOINLINE bool probe(float t, int walkSteps, bool far, float &value,
+                                                 bool pastMesh = false) {
+    return locateSample<Sampling>(volume, skipEmpty, clearVoxels, ray, t, walkSteps, far, kNoCell, at, value,
+                                  pastMesh);
   }
 
   /// The field at `t`, grid point `k`, into `value`; false where no cell holds the sample. `walkSteps` and

@@ -10,3 +10,11 @@
 #else
 #define UVR_HOST_INLINE inline __attribute__((always_inline))
 #endif
+
+// Called, not inlined, on the GPU: one copy of a large function that several call sites share, where a copy
+// at each would crowd the kernel's hot code out of the instruction cache. The host inlines as it sees fit.
+#if defined(__CUDA_ARCH__)
+#define UVR_DEVICE_NOINLINE __noinline__
+#else
+#define UVR_DEVICE_NOINLINE inline
+#endif

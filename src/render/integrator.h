@@ -180,7 +180,7 @@ struct RayMarch : ShadeState<kShade || kIso>, IsoState<kIso> {
       // A segment closed past the ray's last crossing out of the mesh: its end lies outside but for the
       // boundary's bulges, which the walk finds; the slow ways a missed sample takes would find nothing more
       // (on a GPU, a BVH query that keeps the warp waiting).
-      const bool inside = sampler.sample(t, k, walkSteps, far, value, closing && intervals.pastMesh(t));
+      const bool inside = locate(t, k, walkSteps, far, value, closing && intervals.pastMesh(t));
       const bool refining = kAligned > k;
       kNext = refining ? (inside ? kAligned : k + 1.f) : k + stride;
       if constexpr (kPreintegrate) {
@@ -286,6 +286,17 @@ struct RayMarch : ShadeState<kShade || kIso>, IsoState<kIso> {
   }
 
 private:
+  /// The field at `t`, grid point `k`, as RaySampler::sample takes it. Where the policy says so, a march that
+  /// draws isosurfaces locates its samples by the probe that its search calls at intervals' ends and in each
+  /// crossing's refinement: one copy of the locate in the kernel, not one at each of those places.
+  UVR_HOST_DEVICE UVR_HOST_INLINE bool locate(float t, float k, int walkSteps, bool far, float &value,
+                                              bool pastMesh) {
+    if constexpr (kIso && Sampling::kIsoSamplesByProbe)
+      return sampler.probe(t, walkSteps, far, value, pastMesh);
+    else
+      return sampler.sample(t, k, walkSteps, far, value, pastMesh);
+  }
+
   /// Composites the pending segment, its value running linearly to `endValue` at its end. Cell data steps
   /// instead, from the pending value to `endValue` halfway between where the ray leaves the pending sample's
   /// cell and where it enters the end's (cells between, which neither sample lies in, count half to each);
