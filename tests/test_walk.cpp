@@ -285,6 +285,47 @@ TEST(WalkCells, FindTheCellHoldingEachSample) {
   }
 }
 
+// Where a walk found a sample in another cell than a tet, the parametric coordinates it leaves are the
+// sample's: per-point vectors interpolated at them (interpolatePointVectors, as shading does), rather than
+// solved for again, reproduce a linear field, the points' own positions, as a solve does.
+TEST(WalkCells, LeaveTheSamplesCoordinatesForVectors) {
+  for (const CellType type : {CellType::Hexahedron, CellType::Wedge, CellType::Pyramid}) {
+    SCOPED_TRACE(int(type));
+    const Mesh mesh = buildMesh(makeBoxGrid(
+                                    type, 4, kCube, [](Vec3f p) { return p.x + p.y; }, 0.3f, 7),
+                                "lattice");
+    const std::vector<uint32_t> neighbors = buildCellNeighbors(mesh);
+    VolumeView volume;
+    volume.mesh = makeMeshView(mesh, 0);
+    const std::vector<Vec4f> planes = buildCellFacePlanes(volume.mesh);
+    volume.cellNeighbors = neighbors.data();
+    volume.cellFacePlanes = planes.data();
+    std::mt19937 random(5);
+    int reused = 0;
+    for (int r = 0; r < 40; ++r) {
+      const auto [origin, ray, tExit] = randomRayInCube(random);
+      RayCell at;
+      at.cell = cellHolding(volume.mesh, origin);
+      ASSERT_NE(at.cell, kNoCell);
+      for (float t = 0.f; t < tExit - 1e-3f; t += 0.1f) {
+        const Vec3f p = ray.at(t);
+        float value;
+        if (!walkCells<HostSampling>(volume, ray, t, at.cell, false, 64, at, value)) {
+          at.enter(cellHolding(volume.mesh, p));
+          continue;
+        }
+        ASSERT_TRUE(at.parametric);
+        reused += at.t == t;
+        const Vec3f walked = interpolatePointVectors(volume.mesh, volume.mesh.points, at, p, t, true);
+        const Vec3f solved = interpolatePointVectors(volume.mesh, volume.mesh.points, at, p, t, false);
+        EXPECT_LT(length(walked - p), 1e-4f);
+        EXPECT_LT(length(walked - solved), 1e-4f);
+      }
+    }
+    EXPECT_GT(reused, 100);
+  }
+}
+
 // In a lattice of pyramids (six around each cube's centre) whose pyramids on the cube's sides are each cut
 // into two tets, walks along random rays go from tets into pyramids across the triangles they share: linked
 // both ways (linkTetsToOtherCells), a walk that starts in a tet goes on into the other cells rather than stop
