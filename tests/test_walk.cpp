@@ -238,6 +238,23 @@ TEST(CellNeighbors, LinkEachInnerFaceBothWays) {
   }
 }
 
+/// A jittered lattice of cells of one type, with what walks across its cells need.
+struct WalkableLattice {
+  Mesh mesh;
+  std::vector<uint32_t> neighbors;
+  std::vector<Vec4f> planes;
+  VolumeView volume;
+
+  WalkableLattice(CellType type, int n, float (*field)(Vec3f), uint32_t seed)
+      : mesh(buildMesh(makeBoxGrid(type, n, kCube, field, 0.3f, seed), "lattice")),
+        neighbors(buildCellNeighbors(mesh)) {
+    volume.mesh = makeMeshView(mesh, 0);
+    planes = buildCellFacePlanes(volume.mesh);
+    volume.cellNeighbors = neighbors.data();
+    volume.cellFacePlanes = planes.data();
+  }
+};
+
 // Samples along random rays through jittered lattices of each cell type, each walked to from the previous
 // one's cell across faces, land in a cell holding them with the value that cell interpolates there. The
 // faces' planes only approximate the faces of such distorted cells, so a walk may circle and give up (the
@@ -245,17 +262,11 @@ TEST(CellNeighbors, LinkEachInnerFaceBothWays) {
 TEST(WalkCells, FindTheCellHoldingEachSample) {
   for (const CellType type : {CellType::Hexahedron, CellType::Wedge, CellType::Pyramid}) {
     SCOPED_TRACE(int(type));
-    const Mesh mesh = buildMesh(makeBoxGrid(
-                                    type, 5, kCube, [](Vec3f p) { return p.x * p.y + p.z; }, 0.3f, 11),
-                                "lattice");
-    const std::vector<uint32_t> neighbors = buildCellNeighbors(mesh);
-    VolumeView volume;
-    volume.mesh = makeMeshView(mesh, 0);
-    const std::vector<Vec4f> planes = buildCellFacePlanes(volume.mesh);
+    const WalkableLattice lattice(
+        type, 5, [](Vec3f p) { return p.x * p.y + p.z; }, 11);
+    const VolumeView &volume = lattice.volume;
     // Hexahedra are left by their parametric coordinates: they need no planes.
-    EXPECT_EQ(planes.empty(), type == CellType::Hexahedron);
-    volume.cellNeighbors = neighbors.data();
-    volume.cellFacePlanes = planes.data();
+    EXPECT_EQ(lattice.planes.empty(), type == CellType::Hexahedron);
     std::mt19937 random(3);
     int steps = 0, walks = 0, failed = 0;
     for (int r = 0; r < 100; ++r) {
@@ -291,15 +302,9 @@ TEST(WalkCells, FindTheCellHoldingEachSample) {
 TEST(WalkCells, LeaveTheSamplesCoordinatesForVectors) {
   for (const CellType type : {CellType::Hexahedron, CellType::Wedge, CellType::Pyramid}) {
     SCOPED_TRACE(int(type));
-    const Mesh mesh = buildMesh(makeBoxGrid(
-                                    type, 4, kCube, [](Vec3f p) { return p.x + p.y; }, 0.3f, 7),
-                                "lattice");
-    const std::vector<uint32_t> neighbors = buildCellNeighbors(mesh);
-    VolumeView volume;
-    volume.mesh = makeMeshView(mesh, 0);
-    const std::vector<Vec4f> planes = buildCellFacePlanes(volume.mesh);
-    volume.cellNeighbors = neighbors.data();
-    volume.cellFacePlanes = planes.data();
+    const WalkableLattice lattice(
+        type, 4, [](Vec3f p) { return p.x + p.y; }, 7);
+    const VolumeView &volume = lattice.volume;
     std::mt19937 random(5);
     int reused = 0;
     for (int r = 0; r < 40; ++r) {
