@@ -306,7 +306,7 @@ TEST(WalkCells, LeaveTheSamplesCoordinatesForVectors) {
         type, 4, [](Vec3f p) { return p.x + p.y; }, 7);
     const VolumeView &volume = lattice.volume;
     std::mt19937 random(5);
-    int reused = 0;
+    int samples = 0;
     for (int r = 0; r < 40; ++r) {
       const auto [origin, ray, tExit] = randomRayInCube(random);
       RayCell at;
@@ -320,14 +320,14 @@ TEST(WalkCells, LeaveTheSamplesCoordinatesForVectors) {
           continue;
         }
         ASSERT_TRUE(at.parametric);
-        reused += at.t == t;
+        samples += at.t == t;
         const Vec3f walked = interpolatePointVectors(volume.mesh, volume.mesh.points, at, p, t, true);
         const Vec3f solved = interpolatePointVectors(volume.mesh, volume.mesh.points, at, p, t, false);
         EXPECT_LT(length(walked - p), 1e-4f);
         EXPECT_LT(length(walked - solved), 1e-4f);
       }
     }
-    EXPECT_GT(reused, 100);
+    EXPECT_GT(samples, 100);
   }
 }
 
