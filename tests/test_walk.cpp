@@ -321,8 +321,10 @@ TEST(WalkCells, LeaveTheSamplesCoordinatesForVectors) {
         }
         ASSERT_TRUE(at.parametric);
         samples += at.t == t;
-        const Vec3f walked = interpolatePointVectors(volume.mesh, volume.mesh.points, at, p, t, true);
-        const Vec3f solved = interpolatePointVectors(volume.mesh, volume.mesh.points, at, p, t, false);
+        RayCell unsolved = at; // the same cell, its coordinates to be solved for again
+        unsolved.parametric = false;
+        const Vec3f walked = interpolatePointVectors(volume.mesh, volume.mesh.points, at, p, t);
+        const Vec3f solved = interpolatePointVectors(volume.mesh, volume.mesh.points, unsolved, p, t);
         EXPECT_LT(length(walked - p), 1e-4f);
         EXPECT_LT(length(walked - solved), 1e-4f);
       }

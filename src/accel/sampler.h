@@ -29,9 +29,6 @@ struct DeviceSampling {
   static constexpr bool kCellsBetweenSamples = false;
   /// Drawing isosurfaces, locate the samples too by the sampler's one out-of-line probe (RayMarch::locate).
   static constexpr bool kIsoSamplesByProbe = true;
-  /// Interpolate per-point vectors in a cell the walk solved for a sample's parametric coordinates at those
-  /// coordinates, not by a solve of their own (interpolatePointVectors). Off on the GPU until measured there.
-  static constexpr bool kVectorsAtTheWalksSolve = false;
 };
 
 /// The GPU's sampling of a mesh with other cells than tets whose adjacency it holds: walks across them too.
@@ -49,7 +46,6 @@ struct HostSampling {
   static constexpr bool kTrail = true;
   static constexpr bool kCellsBetweenSamples = true;
   static constexpr bool kIsoSamplesByProbe = false;
-  static constexpr bool kVectorsAtTheWalksSolve = true;
 };
 
 /// The cell a ray's last sample lies in. For a tet, also the sample's barycentric weights and field with
@@ -413,10 +409,10 @@ UVR_HOST_DEVICE inline Vec3f interpolateAt(const Vec3f *perPoint, const uint32_t
 /// A per-point vector (the field's gradient) interpolated to `p`, the point at `t` on a ray, in `at.cell`,
 /// the cell the sampler found it in: a tet by the weights the walk carries (or, where it found the tet
 /// another way, its barycentric weights), another cell by its shape functions at the parametric coordinates
-/// the walk solved for at `t` (where it did, and `atWalksSolve`) or else solved for here, or where that solve
-/// fails, the mean of its corners.
+/// the walk solved for at `t` (where it did) or else solved for here, or where that solve fails, the mean of
+/// its corners.
 UVR_HOST_DEVICE inline Vec3f interpolatePointVectors(const MeshView &mesh, const Vec3f *perPoint,
-                                                     const RayCell &at, Vec3f p, float t, bool atWalksSolve) {
+                                                     const RayCell &at, Vec3f p, float t) {
   int count;
   const uint32_t *v = cellCorners(mesh, at.cell, count);
   if (count == 4) {
@@ -430,7 +426,7 @@ UVR_HOST_DEVICE inline Vec3f interpolatePointVectors(const MeshView &mesh, const
     }
     return perPoint[v[0]] * w[0] + perPoint[v[1]] * w[1] + perPoint[v[2]] * w[2] + perPoint[v[3]] * w[3];
   }
-  if (atWalksSolve && at.parametric && at.t == t) {
+  if (at.parametric && at.t == t) {
     // The walk solved for this very point.
     const Vec3f r{at.w[0], at.w[1], at.w[2]};
     return count == 5   ? interpolateAt<5>(perPoint, v, r)
@@ -500,8 +496,7 @@ template <class Sampling> struct RaySampler {
 
   /// A per-point vector interpolated to the last sample located, at `t` (see interpolatePointVectors).
   UVR_HOST_DEVICE Vec3f pointVectorAt(const Vec3f *perPoint, float t) const {
-    return interpolatePointVectors(volume.mesh, perPoint, at, ray.at(t), t,
-                                   Sampling::kVectorsAtTheWalksSolve);
+    return interpolatePointVectors(volume.mesh, perPoint, at, ray.at(t), t);
   }
 
   /// The field at `t` into `value`, anywhere along the ray (a point between samples: the sampler moves to
