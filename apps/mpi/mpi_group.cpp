@@ -143,6 +143,7 @@ std::vector<PixelRect> coloredRects(const float *rgba, int width, const std::vec
 
 // 16 bits a channel: a thousandth of what an 8-bit image resolves, at half the bytes of floats.
 constexpr float kChannelScale = 65535.f;
+uint16_t toChannel(float v) { return uint16_t(std::clamp(v, 0.f, 1.f) * kChannelScale + 0.5f); }
 
 /// Writes the rectangles' pixels of the image (`width` pixels a row, its first row `firstRow`) to `out`,
 /// rectangle r at offsets[r], 16 bits a channel.
@@ -154,7 +155,7 @@ void pack(uint16_t *out, const float *rgba, int width, int firstRow, const std::
       const float *from = rgba + (size_t(y - firstRow) * size_t(width) + size_t(rect.x0)) * 4;
       uint16_t *to = out + offsets[r] + size_t(y - rect.y0) * rect.rowChannels();
       for (size_t c = 0; c < rect.rowChannels(); ++c)
-        to[c] = uint16_t(std::clamp(from[c], 0.f, 1.f) * kChannelScale + 0.5f);
+        to[c] = toChannel(from[c]);
     });
   }
 }
@@ -195,19 +196,28 @@ uint64_t MpiGroup::composite(std::vector<float> &rgba, int width, int height, co
   MPI_Alltoallv(sent_.data(), sendCounts.data(), sendOffsets.data(), MPI_UINT16_T, received_.data(),
                 receiveCounts.data(), receiveOffsets.data(), MPI_UINT16_T, MPI_COMM_WORLD);
 
-  // Front to back: each region's colour behind what the regions before it let through.
-  band_.resize(size_t(bandRows) * size_t(width) * 4);
-  forRows(bandBegin, bandBegin + bandRows, [&](int y) {
-    float *row = band_.data() + size_t(y - bandBegin) * size_t(width) * 4;
-    std::fill(row, row + 4 * size_t(width), 0.f);
+  // Front to back: each region's colour behind what the regions before it let through, over the rectangle
+  // that holds all they sent (outside it none has colour), row by row into 16 bits to send on to rank 0.
+  PixelRect mine{width, 0, bandBegin + bandRows, bandBegin};
+  for (const PixelRect &rect : receivedRects)
+    if (rect.pixels() > 0)
+      mine = {std::min(mine.x0, rect.x0), std::max(mine.x1, rect.x1), std::min(mine.y0, rect.y0),
+              std::max(mine.y1, rect.y1)};
+  if (!(mine.y0 < mine.y1))
+    mine = {0, 0, bandBegin, bandBegin};
+  band_.resize(4 * mine.pixels());
+  sent_.resize(4 * mine.pixels());
+  forRows(mine.y0, mine.y1, [&](int y) {
+    float *row = band_.data() + size_t(y - mine.y0) * mine.rowChannels();
+    std::fill(row, row + mine.rowChannels(), 0.f);
     for (const int r : order) {
       const PixelRect &rect = receivedRects[size_t(r)];
       if (y < rect.y0 || y >= rect.y1)
         continue;
       const uint16_t *layer =
           received_.data() + receiveOffsets[size_t(r)] + size_t(y - rect.y0) * rect.rowChannels();
-      for (float *out = row + 4 * size_t(rect.x0), *end = row + 4 * size_t(rect.x1); out != end;
-           out += 4, layer += 4) {
+      for (float *out = row + 4 * size_t(rect.x0 - mine.x0), *end = row + 4 * size_t(rect.x1 - mine.x0);
+           out != end; out += 4, layer += 4) {
         // A ray stops once this opaque (the renderer's early termination): so does the composite, else the
         // regions behind would add what a single process leaves out.
         constexpr float kTerminationOpacity = 0.99f;
@@ -218,14 +228,14 @@ uint64_t MpiGroup::composite(std::vector<float> &rgba, int width, int height, co
           out[c] += through * float(layer[c]);
       }
     }
+    uint16_t *to = sent_.data() + size_t(y - mine.y0) * mine.rowChannels();
+    for (size_t c = 0; c < mine.rowChannels(); ++c)
+      to[c] = toChannel(row[c]);
   });
 
-  // The composited bands' coloured rectangles to rank 0.
-  const std::vector<PixelRect> mine = coloredRects(band_.data(), width, {bandBegin, bandBegin + bandRows});
-  sent_.resize(4 * mine[0].pixels());
-  pack(sent_.data(), band_.data(), width, bandBegin, mine, {0});
+  // The composited bands' rectangles to rank 0.
   std::vector<PixelRect> bandRects(rank_ == 0 ? ranks : 0);
-  MPI_Gather(mine.data(), 4, MPI_INT, bandRects.data(), 4, MPI_INT, 0, MPI_COMM_WORLD);
+  MPI_Gather(&mine, 4, MPI_INT, bandRects.data(), 4, MPI_INT, 0, MPI_COMM_WORLD);
   receivedTotal = 0;
   for (size_t r = 0; r < bandRects.size(); ++r) {
     receiveOffsets[r] = receivedTotal;
