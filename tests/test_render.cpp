@@ -16,6 +16,7 @@
 #include <array>
 #include <cmath>
 #include <functional>
+#include <random>
 #include <string>
 #include <utility>
 #include <vector>
@@ -790,6 +791,56 @@ TEST(Camera, ResetCameraFitsTheBoundingSphereInBothAngles) {
     EXPECT_NEAR(sphereHalfAngle, std::min(verticalHalfAngle, horizontalHalfAngle), 1e-5f)
         << width << "x" << height;
   }
+}
+
+// The pixels a box can cover (what a rank's image is scanned for colour in): every pixel whose ray meets the
+// box lies among them, and, seen whole from in front, they reach only a few pixels past those; a box
+// reaching behind the eye gives the whole image.
+TEST(Camera, BoxPixelsHoldEveryRayThatMeetsTheBox) {
+  std::mt19937 random(3);
+  std::uniform_real_distribution<float> unit(-1.f, 1.f);
+  const int width = 120, height = 80;
+  int partly = 0, behind = 0;
+  for (int trial = 0; trial < 60; ++trial) {
+    Camera camera;
+    camera.eye = Vec3f{unit(random), unit(random), unit(random)} * (trial % 3 == 0 ? 2.f : 6.f);
+    camera.at = Vec3f{unit(random), unit(random), unit(random)};
+    camera.fovy = 20.f + 40.f * (unit(random) + 1.f);
+    const Vec3f corner{unit(random) * 2.f, unit(random) * 2.f, unit(random) * 2.f};
+    const Box3f box{corner,
+                    corner + Vec3f{1.f + unit(random), 1.f + unit(random), 1.f + unit(random)} * 0.8f};
+    const PixelBox pixels = boxPixels(camera, width, height, box);
+    const CameraView view = makeCameraView(camera, width, height);
+    PixelBox hit{width, 0, height, 0};
+    for (int y = 0; y < height; ++y)
+      for (int x = 0; x < width; ++x) {
+        float t0, t1;
+        if (!intersectBox(view.ray(x, y), box, 0.f, INFINITY, t0, t1))
+          continue;
+        EXPECT_TRUE(x >= pixels.x0 && x < pixels.x1 && y >= pixels.y0 && y < pixels.y1)
+            << "trial " << trial << ": pixel " << x << "," << y;
+        hit = {std::min(hit.x0, x), std::max(hit.x1, x + 1), std::min(hit.y0, y), std::max(hit.y1, y + 1)};
+      }
+    bool inFront = true;
+    for (int c = 0; c < 8; ++c) {
+      const Vec3f p{c & 1 ? box.upper.x : box.lower.x, c & 2 ? box.upper.y : box.lower.y,
+                    c & 4 ? box.upper.z : box.lower.z};
+      inFront = inFront && dot(p - view.eye, view.forward) > 0.f;
+    }
+    if (!inFront) {
+      ++behind;
+      EXPECT_TRUE(pixels.x0 == 0 && pixels.x1 == width && pixels.y0 == 0 && pixels.y1 == height);
+    } else if (hit.x0 > 0 && hit.x0 < hit.x1 && hit.x1 < width && hit.y0 > 0 && hit.y1 < height) {
+      // Seen whole: a few pixels more than those hit (a corner's projection may lie between pixel centres).
+      ++partly;
+      EXPECT_LE(hit.x0 - pixels.x0, 6);
+      EXPECT_LE(pixels.x1 - hit.x1, 6);
+      EXPECT_LE(hit.y0 - pixels.y0, 6);
+      EXPECT_LE(pixels.y1 - hit.y1, 6);
+    }
+  }
+  EXPECT_GT(partly, 5);
+  EXPECT_GT(behind, 0);
 }
 
 // Partitions of the default size unless a leaf size is given, and the CPU's count follows it.

@@ -97,12 +97,9 @@ std::vector<std::vector<int64_t>> MpiGroup::allGather(const std::vector<int64_t>
 
 namespace {
 
-/// Pixels [x0, x1) of rows [y0, y1).
-struct PixelRect {
-  int x0 = 0, x1 = 0, y0 = 0, y1 = 0;
-  size_t pixels() const { return size_t(x1 - x0) * size_t(y1 - y0); }
-  size_t rowChannels() const { return 4 * size_t(x1 - x0); }
-};
+size_t pixels(const PixelBox &box) { return size_t(box.x1 - box.x0) * size_t(box.y1 - box.y0); }
+/// The channels of a row of the box's pixels.
+size_t rowChannels(const PixelBox &box) { return 4 * size_t(box.x1 - box.x0); }
 
 /// Runs row(y) for y in [begin, end) on all of this rank's threads: each pass over a frame's image on one
 /// core costs about a millisecond.
@@ -114,47 +111,49 @@ template <class Row> void forRows(int begin, int end, const Row &row) {
 }
 
 /// The smallest rectangle of each band of rows of a premultiplied RGBA image (band b: rows [bands[b],
-/// bands[b + 1]); `rgba` holds rows from bands[0] on) that holds every pixel of non-zero opacity
-/// (premultiplied, a pixel without opacity holds no colour); empty where none has.
-std::vector<PixelRect> coloredRects(const float *rgba, int width, const std::vector<int> &bands) {
-  std::vector<int> first(size_t(bands.back() - bands.front())), last(first.size());
-  forRows(0, int(first.size()), [&](int i) {
-    const float *row = rgba + size_t(i) * size_t(width) * 4;
-    int x0 = 0, x1 = width;
-    while (x0 < width && !(row[4 * x0 + 3] > 0.f))
+/// bands[b + 1]) of the image's rows from 0) that holds every pixel of non-zero opacity (premultiplied, a
+/// pixel without opacity holds no colour), where none lies outside `colour`; empty where none has.
+std::vector<PixelBox> coloredRects(const float *rgba, int width, const std::vector<int> &bands,
+                                   const PixelBox &colour) {
+  std::vector<int> first(size_t(bands.back())), last(first.size());
+  forRows(0, bands.back(), [&](int y) {
+    const float *row = rgba + size_t(y) * size_t(width) * 4;
+    int x0 = colour.x0, x1 = colour.x1;
+    if (y < colour.y0 || y >= colour.y1)
+      x1 = x0;
+    while (x0 < x1 && !(row[4 * x0 + 3] > 0.f))
       ++x0;
     while (x1 > x0 && !(row[4 * (x1 - 1) + 3] > 0.f))
       --x1;
-    first[size_t(i)] = x0;
-    last[size_t(i)] = x1;
+    first[size_t(y)] = x0;
+    last[size_t(y)] = x1;
   });
-  std::vector<PixelRect> rects;
+  std::vector<PixelBox> rects;
   for (size_t b = 0; b + 1 < bands.size(); ++b) {
-    PixelRect rect{width, 0, bands[b + 1], bands[b]};
+    PixelBox rect{width, 0, bands[b + 1], bands[b]};
     for (int y = bands[b]; y < bands[b + 1]; ++y) {
-      const size_t i = size_t(y - bands.front());
-      if (first[i] < last[i])
-        rect = {std::min(rect.x0, first[i]), std::max(rect.x1, last[i]), std::min(rect.y0, y), y + 1};
+      if (first[size_t(y)] < last[size_t(y)])
+        rect = {std::min(rect.x0, first[size_t(y)]), std::max(rect.x1, last[size_t(y)]), std::min(rect.y0, y),
+                y + 1};
     }
-    rects.push_back(rect.y0 < rect.y1 ? rect : PixelRect{0, 0, bands[b], bands[b]});
+    rects.push_back(rect.y0 < rect.y1 ? rect : PixelBox{0, 0, bands[b], bands[b]});
   }
   return rects;
 }
-
 // 16 bits a channel: a thousandth of what an 8-bit image resolves, at half the bytes of floats.
 constexpr float kChannelScale = 65535.f;
 uint16_t toChannel(float v) { return uint16_t(std::clamp(v, 0.f, 1.f) * kChannelScale + 0.5f); }
 
 /// Writes the rectangles' pixels of the image (`width` pixels a row, its first row `firstRow`) to `out`,
 /// rectangle r at offsets[r], 16 bits a channel.
-void pack(uint16_t *out, const float *rgba, int width, int firstRow, const std::vector<PixelRect> &rects,
+void pack(uint16_t *out, const float *rgba, int width, int firstRow, const std::vector<PixelBox> &rects,
           const std::vector<int> &offsets) {
   for (size_t r = 0; r < rects.size(); ++r) {
-    const PixelRect &rect = rects[r];
+    const PixelBox &rect = rects[r];
     forRows(rect.y0, rect.y1, [&](int y) {
       const float *from = rgba + (size_t(y - firstRow) * size_t(width) + size_t(rect.x0)) * 4;
-      uint16_t *to = out + offsets[r] + size_t(y - rect.y0) * rect.rowChannels();
-      for (size_t c = 0; c < rect.rowChannels(); ++c)
+      uint16_t *to = out + offsets[r] + size_t(y - rect.y0) * rowChannels(rect);
+      for (size_t c = 0; c < rowChannels(rect); ++c)
         to[c] = toChannel(from[c]);
     });
   }
@@ -162,7 +161,8 @@ void pack(uint16_t *out, const float *rgba, int width, int firstRow, const std::
 
 } // namespace
 
-uint64_t MpiGroup::composite(std::vector<float> &rgba, int width, int height, const std::vector<int> &order) {
+uint64_t MpiGroup::composite(std::vector<float> &rgba, int width, int height, const std::vector<int> &order,
+                             const PixelBox &colour) {
   // Rank r composites rows [bands[r], bands[r + 1]).
   std::vector<int> bands;
   for (int r = 0; r <= size_; ++r)
@@ -171,25 +171,25 @@ uint64_t MpiGroup::composite(std::vector<float> &rgba, int width, int height, co
   const int bandBegin = bands[size_t(rank_)], bandRows = bands[size_t(rank_) + 1] - bandBegin;
 
   // Each band's coloured rectangle to the rank that composites it, the rectangles first.
-  const std::vector<PixelRect> sentRects = coloredRects(rgba.data(), width, bands);
-  std::vector<PixelRect> receivedRects(ranks);
+  const std::vector<PixelBox> sentRects = coloredRects(rgba.data(), width, bands, colour);
+  std::vector<PixelBox> receivedRects(ranks);
   std::vector<int> sendCounts(ranks), sendOffsets(ranks), receiveCounts(ranks), receiveOffsets(ranks);
   int sentTotal = 0, receivedTotal = 0;
   uint64_t sentBytes = 0;
   for (size_t r = 0; r < ranks; ++r) {
     sendOffsets[r] = sentTotal;
-    sendCounts[r] = int(4 * sentRects[r].pixels());
+    sendCounts[r] = int(4 * pixels(sentRects[r]));
     sentTotal += sendCounts[r];
     if (int(r) != rank_)
       sentBytes += uint64_t(sendCounts[r]) * sizeof(uint16_t);
   }
   sent_.resize(size_t(sentTotal));
   pack(sent_.data(), rgba.data(), width, 0, sentRects, sendOffsets);
-  static_assert(sizeof(PixelRect) == 4 * sizeof(int));
+  static_assert(sizeof(PixelBox) == 4 * sizeof(int));
   MPI_Alltoall(sentRects.data(), 4, MPI_INT, receivedRects.data(), 4, MPI_INT, MPI_COMM_WORLD);
   for (size_t r = 0; r < ranks; ++r) {
     receiveOffsets[r] = receivedTotal;
-    receiveCounts[r] = int(4 * receivedRects[r].pixels());
+    receiveCounts[r] = int(4 * pixels(receivedRects[r]));
     receivedTotal += receiveCounts[r];
   }
   received_.resize(size_t(receivedTotal));
@@ -198,24 +198,24 @@ uint64_t MpiGroup::composite(std::vector<float> &rgba, int width, int height, co
 
   // Front to back: each region's colour behind what the regions before it let through, over the rectangle
   // that holds all they sent (outside it none has colour), row by row into 16 bits to send on to rank 0.
-  PixelRect mine{width, 0, bandBegin + bandRows, bandBegin};
-  for (const PixelRect &rect : receivedRects)
-    if (rect.pixels() > 0)
+  PixelBox mine{width, 0, bandBegin + bandRows, bandBegin};
+  for (const PixelBox &rect : receivedRects)
+    if (pixels(rect) > 0)
       mine = {std::min(mine.x0, rect.x0), std::max(mine.x1, rect.x1), std::min(mine.y0, rect.y0),
               std::max(mine.y1, rect.y1)};
   if (!(mine.y0 < mine.y1))
     mine = {0, 0, bandBegin, bandBegin};
-  band_.resize(4 * mine.pixels());
-  sent_.resize(4 * mine.pixels());
+  band_.resize(4 * pixels(mine));
+  sent_.resize(4 * pixels(mine));
   forRows(mine.y0, mine.y1, [&](int y) {
-    float *row = band_.data() + size_t(y - mine.y0) * mine.rowChannels();
-    std::fill(row, row + mine.rowChannels(), 0.f);
+    float *row = band_.data() + size_t(y - mine.y0) * rowChannels(mine);
+    std::fill(row, row + rowChannels(mine), 0.f);
     for (const int r : order) {
-      const PixelRect &rect = receivedRects[size_t(r)];
+      const PixelBox &rect = receivedRects[size_t(r)];
       if (y < rect.y0 || y >= rect.y1)
         continue;
       const uint16_t *layer =
-          received_.data() + receiveOffsets[size_t(r)] + size_t(y - rect.y0) * rect.rowChannels();
+          received_.data() + receiveOffsets[size_t(r)] + size_t(y - rect.y0) * rowChannels(rect);
       for (float *out = row + 4 * size_t(rect.x0 - mine.x0), *end = row + 4 * size_t(rect.x1 - mine.x0);
            out != end; out += 4, layer += 4) {
         // A ray stops once this opaque (the renderer's early termination): so does the composite, else the
@@ -228,18 +228,18 @@ uint64_t MpiGroup::composite(std::vector<float> &rgba, int width, int height, co
           out[c] += through * float(layer[c]);
       }
     }
-    uint16_t *to = sent_.data() + size_t(y - mine.y0) * mine.rowChannels();
-    for (size_t c = 0; c < mine.rowChannels(); ++c)
+    uint16_t *to = sent_.data() + size_t(y - mine.y0) * rowChannels(mine);
+    for (size_t c = 0; c < rowChannels(mine); ++c)
       to[c] = toChannel(row[c]);
   });
 
   // The composited bands' rectangles to rank 0.
-  std::vector<PixelRect> bandRects(rank_ == 0 ? ranks : 0);
+  std::vector<PixelBox> bandRects(rank_ == 0 ? ranks : 0);
   MPI_Gather(&mine, 4, MPI_INT, bandRects.data(), 4, MPI_INT, 0, MPI_COMM_WORLD);
   receivedTotal = 0;
   for (size_t r = 0; r < bandRects.size(); ++r) {
     receiveOffsets[r] = receivedTotal;
-    receiveCounts[r] = int(4 * bandRects[r].pixels());
+    receiveCounts[r] = int(4 * pixels(bandRects[r]));
     receivedTotal += receiveCounts[r];
   }
   received_.resize(size_t(receivedTotal));
@@ -253,7 +253,7 @@ uint64_t MpiGroup::composite(std::vector<float> &rgba, int width, int height, co
   for (size_t r = 0; r < ranks; ++r)
     for (int y = bandRects[r].y0; y < bandRects[r].y1; ++y) {
       rowFrom[size_t(y)] =
-          received_.data() + receiveOffsets[r] + size_t(y - bandRects[r].y0) * bandRects[r].rowChannels();
+          received_.data() + receiveOffsets[r] + size_t(y - bandRects[r].y0) * rowChannels(bandRects[r]);
       rowX0[size_t(y)] = bandRects[r].x0;
       rowX1[size_t(y)] = bandRects[r].x1;
     }

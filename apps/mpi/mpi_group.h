@@ -3,6 +3,8 @@
 // holds no MPI type, so that the command compiles the same with or without MPI.
 #pragma once
 
+#include <uvr/camera.h>
+
 #include <cstdint>
 #include <cstdlib>
 #include <functional>
@@ -54,8 +56,10 @@ public:
   /// Composites every rank's premultiplied RGBA image (`width` x `height`, 4 floats a pixel) front to back
   /// in `order` (ranks, front first) by direct send: each rank composites a band of rows from every rank's
   /// part of it, and rank 0 gathers the bands into `rgba`. What travels is the rectangle of each band that
-  /// holds colour, 16 bits a channel. Returns the bytes this rank sent.
-  uint64_t composite(std::vector<float> &rgba, int width, int height, const std::vector<int> &order);
+  /// holds colour, 16 bits a channel; this rank's image has none outside `colour`. Returns the bytes this
+  /// rank sent.
+  uint64_t composite(std::vector<float> &rgba, int width, int height, const std::vector<int> &order,
+                     const PixelBox &colour);
 
 private:
   int rank_ = 0, size_ = 1, localRank_ = 0, nodeSize_ = 1;

@@ -370,6 +370,8 @@ void runRenderParallel(const RenderCommandOptions &o) {
   settings.keepSamplesPerPixel = !o.heatmap.empty();
   settings.keepPremultipliedRgba = true;
   const std::vector<int> order = regions.frontToBack(camera.eye);
+  const PixelBox colour =
+      boxPixels(camera, settings.width, settings.height, regions.regions[size_t(group.rank())]);
   std::vector<double> frameTimes, rankTimes, rankKernelTimes, compositeTimes;
   FrameResult frame;
   double tfUpdateMs = 0.0;
@@ -384,7 +386,7 @@ void runRenderParallel(const RenderCommandOptions &o) {
     rankKernelTimes.push_back(frame.stats.gpuKernelMs);
     group.barrier(); // the composite's time, not the wait for the slowest rank's render
     const Timer compositeTimer;
-    sentBytes = group.composite(frame.premultipliedRgba, settings.width, settings.height, order);
+    sentBytes = group.composite(frame.premultipliedRgba, settings.width, settings.height, order, colour);
     compositeTimes.push_back(compositeTimer.milliseconds());
     frameTimes.push_back(frameTimer.milliseconds());
   }

@@ -43,6 +43,16 @@ std::vector<std::string> cameraViewNames();
 /// aspect (validateCamera's checks).
 Camera frameBounds(const Box3f &bounds, const std::string &view, float fovy = 30.f, float aspect = 1.f);
 
+/// Pixels [x0, x1) of rows [y0, y1) of an image, rows counted from the top.
+struct PixelBox {
+  int x0 = 0, x1 = 0, y0 = 0, y1 = 0;
+};
+
+/// The pixels of a `width` x `height` image of `camera` whose rays can meet `box`: the bounds of its corners'
+/// projections and a pixel more on each side, or the whole image where a corner lies level with the eye or
+/// behind it.
+PixelBox boxPixels(const Camera &camera, int width, int height, const Box3f &box);
+
 /// Throws uvr::Error for a camera no image can be made with: a vertical view angle not in (0, 180) degrees,
 /// a non-finite eye, focal point or view-up, eye == focal point, a zero view-up or one parallel to the view
 /// direction. The message names the field (fovy, eye, at, up). VolumeRenderer::render checks every camera.

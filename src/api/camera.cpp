@@ -1,6 +1,8 @@
 #include <uvr/camera.h>
 #include <uvr/error.h>
 
+#include "render/camera.h"
+
 #include <algorithm>
 #include <cmath>
 #include <sstream>
@@ -32,6 +34,31 @@ std::string text(Vec3f v) {
 }
 
 } // namespace
+
+PixelBox boxPixels(const Camera &camera, int width, int height, const Box3f &box) {
+  const PixelBox whole{0, width, 0, height};
+  const CameraView view = makeCameraView(camera, width, height);
+  // A ray's direction is forward + right * u + up * v, with u and v in [-1, 1] across the image.
+  const float rightScale = 1.f / dot(view.right, view.right), upScale = 1.f / dot(view.up, view.up);
+  float uLow = INFINITY, uHigh = -INFINITY, vLow = INFINITY, vHigh = -INFINITY;
+  for (int corner = 0; corner < 8; ++corner) {
+    const Vec3f p{corner & 1 ? box.upper.x : box.lower.x, corner & 2 ? box.upper.y : box.lower.y,
+                  corner & 4 ? box.upper.z : box.lower.z};
+    const Vec3f d = p - view.eye;
+    const float depth = dot(d, view.forward);
+    if (!(depth > 0.f))
+      return whole;
+    const float u = dot(d, view.right) * rightScale / depth, v = dot(d, view.up) * upScale / depth;
+    uLow = std::min(uLow, u), uHigh = std::max(uHigh, u);
+    vLow = std::min(vLow, v), vHigh = std::max(vHigh, v);
+  }
+  // The pixel whose centre lies at u is (u + 1) * width / 2 - 0.5 (CameraView::imageU); rows count down.
+  const auto clamped = [](float at, int size) { return int(std::clamp(at, 0.f, float(size))); };
+  return {clamped(std::floor(0.5f * (uLow + 1.f) * float(width)) - 1.f, width),
+          clamped(std::ceil(0.5f * (uHigh + 1.f) * float(width)) + 1.f, width),
+          clamped(std::floor(0.5f * (1.f - vHigh) * float(height)) - 1.f, height),
+          clamped(std::ceil(0.5f * (1.f - vLow) * float(height)) + 1.f, height)};
+}
 
 std::vector<std::string> cameraViewNames() {
   std::vector<std::string> names;
