@@ -161,8 +161,9 @@ void pack(uint16_t *out, const float *rgba, int width, int firstRow, const std::
 
 } // namespace
 
-uint64_t MpiGroup::composite(std::vector<float> &rgba, int width, int height, const std::vector<int> &order,
-                             const PixelBox &colour) {
+uint64_t MpiGroup::composite(const std::vector<float> &rgba, int width, int height,
+                             const std::vector<int> &order, const PixelBox &colour, Vec3f background,
+                             Image &image) {
   // Rank r composites rows [bands[r], bands[r + 1]).
   std::vector<int> bands;
   for (int r = 0; r <= size_; ++r)
@@ -247,7 +248,15 @@ uint64_t MpiGroup::composite(std::vector<float> &rgba, int width, int height, co
               receiveOffsets.data(), MPI_UINT16_T, 0, MPI_COMM_WORLD);
   if (rank_ != 0)
     return sentBytes + sent_.size() * sizeof(uint16_t);
-  rgba.resize(size_t(height) * size_t(width) * 4);
+  // Over the background, once: 8 bits a channel, rounded as a single process's frame is.
+  const auto toByte = [](float v) { return uint8_t(std::clamp(v, 0.f, 1.f) * 255.f + 0.5f); };
+  const float under[3] = {background.x, background.y, background.z};
+  std::vector<uint8_t> backgroundRow(3 * size_t(width));
+  for (size_t i = 0; i < backgroundRow.size(); ++i)
+    backgroundRow[i] = toByte(under[i % 3]);
+  image.width = width;
+  image.height = height;
+  image.rgb.resize(3 * size_t(width) * size_t(height));
   std::vector<const uint16_t *> rowFrom(size_t(height), nullptr); // each row's composited pixels, if any
   std::vector<int> rowX0(rowFrom.size()), rowX1(rowFrom.size());
   for (size_t r = 0; r < ranks; ++r)
@@ -258,12 +267,17 @@ uint64_t MpiGroup::composite(std::vector<float> &rgba, int width, int height, co
       rowX1[size_t(y)] = bandRects[r].x1;
     }
   forRows(0, height, [&](int y) {
-    float *row = rgba.data() + size_t(y) * size_t(width) * 4;
-    std::fill(row, row + 4 * size_t(width), 0.f);
-    if (const uint16_t *from = rowFrom[size_t(y)])
-      for (float *to = row + 4 * size_t(rowX0[size_t(y)]), *end = row + 4 * size_t(rowX1[size_t(y)]);
-           to != end; ++to, ++from)
-        *to = float(*from) * (1.f / kChannelScale);
+    uint8_t *row = image.rgb.data() + 3 * size_t(y) * size_t(width);
+    const uint16_t *from = rowFrom[size_t(y)];
+    const int x0 = from ? rowX0[size_t(y)] : width, x1 = from ? rowX1[size_t(y)] : width;
+    std::copy(backgroundRow.data(), backgroundRow.data() + 3 * size_t(x0), row);
+    for (int x = x0; x < x1; ++x, from += 4) {
+      const float through = 1.f - float(from[3]) * (1.f / kChannelScale);
+      for (int c = 0; c < 3; ++c)
+        row[3 * size_t(x) + size_t(c)] = toByte(float(from[c]) * (1.f / kChannelScale) + through * under[c]);
+    }
+    std::copy(backgroundRow.data() + 3 * size_t(x1), backgroundRow.data() + 3 * size_t(width),
+              row + 3 * size_t(x1));
   });
   return sentBytes;
 }

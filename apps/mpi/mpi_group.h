@@ -4,6 +4,7 @@
 #pragma once
 
 #include <uvr/camera.h>
+#include <uvr/image.h>
 
 #include <cstdint>
 #include <cstdlib>
@@ -55,11 +56,11 @@ public:
 
   /// Composites every rank's premultiplied RGBA image (`width` x `height`, 4 floats a pixel) front to back
   /// in `order` (ranks, front first) by direct send: each rank composites a band of rows from every rank's
-  /// part of it, and rank 0 gathers the bands into `rgba`. What travels is the rectangle of each band that
-  /// holds colour, 16 bits a channel; this rank's image has none outside `colour`. Returns the bytes this
-  /// rank sent.
-  uint64_t composite(std::vector<float> &rgba, int width, int height, const std::vector<int> &order,
-                     const PixelBox &colour);
+  /// part of it, and rank 0 gathers the bands into `image`, over `background`. What travels is the rectangle
+  /// of each band that holds colour, 16 bits a channel; this rank's image has none outside `colour`. Returns
+  /// the bytes this rank sent.
+  uint64_t composite(const std::vector<float> &rgba, int width, int height, const std::vector<int> &order,
+                     const PixelBox &colour, Vec3f background, Image &image);
 
 private:
   int rank_ = 0, size_ = 1, localRank_ = 0, nodeSize_ = 1;

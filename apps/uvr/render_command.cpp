@@ -374,6 +374,7 @@ void runRenderParallel(const RenderCommandOptions &o) {
       boxPixels(camera, settings.width, settings.height, regions.regions[size_t(group.rank())]);
   std::vector<double> frameTimes, rankTimes, rankKernelTimes, compositeTimes;
   FrameResult frame;
+  Image image; // the composited frame, on rank 0
   double tfUpdateMs = 0.0;
   uint64_t sentBytes = 0;
   for (int i = 0; i < o.frames; ++i) {
@@ -386,7 +387,8 @@ void runRenderParallel(const RenderCommandOptions &o) {
     rankKernelTimes.push_back(frame.stats.gpuKernelMs);
     group.barrier(); // the composite's time, not the wait for the slowest rank's render
     const Timer compositeTimer;
-    sentBytes = group.composite(frame.premultipliedRgba, settings.width, settings.height, order, colour);
+    sentBytes = group.composite(frame.premultipliedRgba, settings.width, settings.height, order, colour,
+                                settings.background, image);
     compositeTimes.push_back(compositeTimer.milliseconds());
     frameTimes.push_back(frameTimer.milliseconds());
   }
@@ -462,18 +464,6 @@ void runRenderParallel(const RenderCommandOptions &o) {
     if (!o.heatmap.empty()) {
       const Image heatmap = heatmapImage(samplesPerPixel, settings.width, settings.height);
       writeWhole(o.heatmap, [&](const std::string &temporary) { writePng(temporary, heatmap); });
-    }
-    // The background once, under the composited image, rounded as a single process's frame rounds it.
-    Image image;
-    image.width = settings.width;
-    image.height = settings.height;
-    image.rgb.resize(3 * size_t(settings.width) * size_t(settings.height));
-    const std::vector<float> &rgba = frame.premultipliedRgba;
-    const auto toByte = [](float v) { return uint8_t(std::clamp(v, 0.f, 1.f) * 255.f + 0.5f); };
-    for (size_t p = 0; p < image.rgb.size() / 3; ++p) {
-      const float through = 1.f - rgba[4 * p + 3];
-      for (int c = 0; c < 3; ++c)
-        image.rgb[3 * p + size_t(c)] = toByte(rgba[4 * p + size_t(c)] + through * settings.background[c]);
     }
     writeWhole(o.output, [&](const std::string &temporary) { writePng(temporary, image); });
   });
