@@ -197,8 +197,16 @@ uint64_t MpiGroup::composite(const std::vector<float> &rgba, int width, int heig
   MPI_Alltoallv(sent_.data(), sendCounts.data(), sendOffsets.data(), MPI_UINT16_T, received_.data(),
                 receiveCounts.data(), receiveOffsets.data(), MPI_UINT16_T, MPI_COMM_WORLD);
 
+  // Over the background, once, 8 bits a channel, rounded as a single process's frame is.
+  const auto toByte = [](float v) { return uint8_t(std::clamp(v, 0.f, 1.f) * 255.f + 0.5f); };
+  const float under[3] = {background.x, background.y, background.z};
+  std::vector<uint8_t> backgroundRow(3 * size_t(width));
+  for (size_t i = 0; i < backgroundRow.size(); ++i)
+    backgroundRow[i] = toByte(under[i % 3]);
+
   // Front to back: each region's colour behind what the regions before it let through, over the rectangle
-  // that holds all they sent (outside it none has colour), row by row into 16 bits to send on to rank 0.
+  // that holds all they sent (outside it none has colour), row by row, and over the background into the
+  // frame's bytes for rank 0.
   PixelBox mine{width, 0, bandBegin + bandRows, bandBegin};
   for (const PixelBox &rect : receivedRects)
     if (pixels(rect) > 0)
@@ -207,7 +215,7 @@ uint64_t MpiGroup::composite(const std::vector<float> &rgba, int width, int heig
   if (!(mine.y0 < mine.y1))
     mine = {0, 0, bandBegin, bandBegin};
   band_.resize(4 * pixels(mine));
-  sent_.resize(4 * pixels(mine));
+  bandRgb_.resize(3 * pixels(mine));
   forRows(mine.y0, mine.y1, [&](int y) {
     float *row = band_.data() + size_t(y - mine.y0) * rowChannels(mine);
     std::fill(row, row + rowChannels(mine), 0.f);
@@ -229,55 +237,47 @@ uint64_t MpiGroup::composite(const std::vector<float> &rgba, int width, int heig
           out[c] += through * float(layer[c]);
       }
     }
-    uint16_t *to = sent_.data() + size_t(y - mine.y0) * rowChannels(mine);
-    for (size_t c = 0; c < rowChannels(mine); ++c)
-      to[c] = toChannel(row[c]);
+    uint8_t *to = bandRgb_.data() + 3 * size_t(y - mine.y0) * size_t(mine.x1 - mine.x0);
+    for (const float *from = row, *end = row + rowChannels(mine); from != end; from += 4, to += 3)
+      for (int c = 0; c < 3; ++c)
+        to[c] = toByte(from[c] + (1.f - from[3]) * under[c]);
   });
 
-  // The composited bands' rectangles to rank 0.
+  // The composited bands' rectangles to rank 0, which lays them in the background.
   std::vector<PixelBox> bandRects(rank_ == 0 ? ranks : 0);
   MPI_Gather(&mine, 4, MPI_INT, bandRects.data(), 4, MPI_INT, 0, MPI_COMM_WORLD);
   receivedTotal = 0;
   for (size_t r = 0; r < bandRects.size(); ++r) {
     receiveOffsets[r] = receivedTotal;
-    receiveCounts[r] = int(4 * pixels(bandRects[r]));
+    receiveCounts[r] = int(3 * pixels(bandRects[r]));
     receivedTotal += receiveCounts[r];
   }
-  received_.resize(size_t(receivedTotal));
-  MPI_Gatherv(sent_.data(), int(sent_.size()), MPI_UINT16_T, received_.data(), receiveCounts.data(),
-              receiveOffsets.data(), MPI_UINT16_T, 0, MPI_COMM_WORLD);
+  gathered_.resize(size_t(receivedTotal));
+  MPI_Gatherv(bandRgb_.data(), int(bandRgb_.size()), MPI_UINT8_T, gathered_.data(), receiveCounts.data(),
+              receiveOffsets.data(), MPI_UINT8_T, 0, MPI_COMM_WORLD);
   if (rank_ != 0)
-    return sentBytes + sent_.size() * sizeof(uint16_t);
-  // Over the background, once: 8 bits a channel, rounded as a single process's frame is.
-  const auto toByte = [](float v) { return uint8_t(std::clamp(v, 0.f, 1.f) * 255.f + 0.5f); };
-  const float under[3] = {background.x, background.y, background.z};
-  std::vector<uint8_t> backgroundRow(3 * size_t(width));
-  for (size_t i = 0; i < backgroundRow.size(); ++i)
-    backgroundRow[i] = toByte(under[i % 3]);
+    return sentBytes + bandRgb_.size();
   image.width = width;
   image.height = height;
   image.rgb.resize(3 * size_t(width) * size_t(height));
-  std::vector<const uint16_t *> rowFrom(size_t(height), nullptr); // each row's composited pixels, if any
+  std::vector<const uint8_t *> rowFrom(size_t(height), nullptr); // each row's composited pixels, if any
   std::vector<int> rowX0(rowFrom.size()), rowX1(rowFrom.size());
   for (size_t r = 0; r < ranks; ++r)
     for (int y = bandRects[r].y0; y < bandRects[r].y1; ++y) {
-      rowFrom[size_t(y)] =
-          received_.data() + receiveOffsets[r] + size_t(y - bandRects[r].y0) * rowChannels(bandRects[r]);
+      rowFrom[size_t(y)] = gathered_.data() + receiveOffsets[r] +
+                           3 * size_t(y - bandRects[r].y0) * size_t(bandRects[r].x1 - bandRects[r].x0);
       rowX0[size_t(y)] = bandRects[r].x0;
       rowX1[size_t(y)] = bandRects[r].x1;
     }
   forRows(0, height, [&](int y) {
     uint8_t *row = image.rgb.data() + 3 * size_t(y) * size_t(width);
-    const uint16_t *from = rowFrom[size_t(y)];
-    const int x0 = from ? rowX0[size_t(y)] : width, x1 = from ? rowX1[size_t(y)] : width;
-    std::copy(backgroundRow.data(), backgroundRow.data() + 3 * size_t(x0), row);
-    for (int x = x0; x < x1; ++x, from += 4) {
-      const float through = 1.f - float(from[3]) * (1.f / kChannelScale);
-      for (int c = 0; c < 3; ++c)
-        row[3 * size_t(x) + size_t(c)] = toByte(float(from[c]) * (1.f / kChannelScale) + through * under[c]);
-    }
-    std::copy(backgroundRow.data() + 3 * size_t(x1), backgroundRow.data() + 3 * size_t(width),
-              row + 3 * size_t(x1));
+    const uint8_t *from = rowFrom[size_t(y)];
+    const size_t x0 = from ? size_t(rowX0[size_t(y)]) : size_t(width);
+    const size_t x1 = from ? size_t(rowX1[size_t(y)]) : size_t(width);
+    std::copy(backgroundRow.data(), backgroundRow.data() + 3 * x0, row);
+    if (from)
+      std::copy(from, from + 3 * (x1 - x0), row + 3 * x0);
+    std::copy(backgroundRow.data() + 3 * x1, backgroundRow.data() + 3 * size_t(width), row + 3 * x1);
   });
   return sentBytes;
 }
