@@ -97,6 +97,7 @@ std::vector<std::vector<int64_t>> MpiGroup::allGather(const std::vector<int64_t>
 
 namespace {
 
+/// The box's pixel count.
 size_t pixels(const PixelBox &box) { return size_t(box.x1 - box.x0) * size_t(box.y1 - box.y0); }
 /// The channels of a row of the box's pixels.
 size_t rowChannels(const PixelBox &box) { return 4 * size_t(box.x1 - box.x0); }
@@ -111,8 +112,8 @@ template <class Row> void forRows(int begin, int end, const Row &row) {
 }
 
 /// The smallest rectangle of each band of rows of a premultiplied RGBA image (band b: rows [bands[b],
-/// bands[b + 1]) of the image's rows from 0) that holds every pixel of non-zero opacity (premultiplied, a
-/// pixel without opacity holds no colour), where none lies outside `colour`; empty where none has.
+/// bands[b + 1]), bands[0] = 0) that holds every pixel of non-zero opacity (premultiplied, a pixel without
+/// opacity holds no colour), given that none lies outside `colour`; empty where none has.
 std::vector<PixelBox> coloredRects(const float *rgba, int width, const std::vector<int> &bands,
                                    const PixelBox &colour) {
   std::vector<int> first(size_t(bands.back())), last(first.size());
@@ -140,6 +141,7 @@ std::vector<PixelBox> coloredRects(const float *rgba, int width, const std::vect
   }
   return rects;
 }
+
 // 16 bits a channel: a thousandth of what an 8-bit image resolves, at half the bytes of floats.
 constexpr float kChannelScale = 65535.f;
 uint16_t toChannel(float v) { return uint16_t(std::clamp(v, 0.f, 1.f) * kChannelScale + 0.5f); }

@@ -56,9 +56,9 @@ public:
 
   /// Composites every rank's premultiplied RGBA image (`width` x `height`, 4 floats a pixel) front to back
   /// in `order` (ranks, front first) by direct send: each rank composites a band of rows from every rank's
-  /// part of it, and rank 0 gathers the bands into `image`, over `background`. What travels is the rectangle
-  /// of each band that holds colour, 16 bits a channel; this rank's image has none outside `colour`. Returns
-  /// the bytes this rank sent.
+  /// part of it, lays it over `background` and sends it to rank 0, which gathers the bands into `image`.
+  /// What travels is the rectangle of each band that holds colour: to the band's rank 16 bits a channel (this
+  /// rank's image has none outside `colour`), to rank 0 8-bit RGB. Returns the bytes this rank sent.
   uint64_t composite(const std::vector<float> &rgba, int width, int height, const std::vector<int> &order,
                      const PixelBox &colour, Vec3f background, Image &image);
 
