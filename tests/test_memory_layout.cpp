@@ -135,6 +135,7 @@ TEST(MemoryLayout, GpuPeakHoldsTheScene) {
   EXPECT_LT(lean.stats.gpuSceneBytes, def.stats.gpuSceneBytes);
 }
 
+// One rank at a time, and several at once sharing their passes.
 TEST(VolumeStats, SelectRankFindsWhatNthElementFinds) {
   // Spread values, many repeats (all in one radix digit until the last), negatives and zeros.
   std::mt19937_64 random(7);
@@ -146,14 +147,20 @@ TEST(VolumeStats, SelectRankFindsWhatNthElementFinds) {
                                 : 1.5 * double(k) - 1.0;
     }
     values[17] = 0.0;
-    for (const uint64_t rank : {uint64_t(0), uint64_t(1999), uint64_t(100000), uint64_t(values.size() - 1)}) {
-      std::vector<double> sorted = values;
-      std::nth_element(sorted.begin(), sorted.begin() + std::ptrdiff_t(rank), sorted.end());
-      for (const uint64_t gather : {uint64_t(16), uint64_t(1) << 22}) // through every digit, or at once
+    const std::vector<uint64_t> ranks{0, 1999, 100000, 100001, values.size() - 1};
+    for (const uint64_t gather : {uint64_t(16), uint64_t(1) << 22}) { // through every digit, or at once
+      const std::vector<double> together = selectRanks(
+          values.size(), ranks, [&](uint64_t i) { return values[i]; }, gather);
+      for (size_t i = 0; i < ranks.size(); ++i) {
+        std::vector<double> sorted = values;
+        std::nth_element(sorted.begin(), sorted.begin() + std::ptrdiff_t(ranks[i]), sorted.end());
         EXPECT_EQ(selectRank(
-                      values.size(), rank, [&](uint64_t i) { return values[i]; }, gather),
-                  sorted[rank])
-            << distinct << " distinct, rank " << rank << ", gathering " << gather;
+                      values.size(), ranks[i], [&](uint64_t v) { return values[v]; }, gather),
+                  sorted[ranks[i]])
+            << distinct << " distinct, rank " << ranks[i] << ", gathering " << gather;
+        EXPECT_EQ(together[i], sorted[ranks[i]])
+            << distinct << " distinct, rank " << ranks[i] << " among others, gathering " << gather;
+      }
     }
   }
 }

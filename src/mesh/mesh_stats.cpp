@@ -88,54 +88,116 @@ double fromOrderedBits(uint64_t u) { return std::bit_cast<double>(u >> 63 ? u & 
 
 } // namespace
 
-double selectRank(uint64_t count, uint64_t rank, const std::function<double(uint64_t)> &value,
-                  uint64_t gatherAtMost) {
+std::vector<double> selectRanks(uint64_t count, const std::vector<uint64_t> &ranks,
+                                const std::function<double(uint64_t)> &value, uint64_t gatherAtMost) {
   constexpr int kDigitBits = 16;
   constexpr size_t kDigits = size_t(1) << kDigitBits;
-  uint64_t prefix = 0; // the digits found so far, of the value at `rank`
-  for (int shift = 64 - kDigitBits;; shift -= kDigitBits) {
-    // Of the values whose higher digits are the prefix, how many have each next digit.
-    auto inPrefix = [&](uint64_t bits) {
-      return shift + kDigitBits == 64 || bits >> (shift + kDigitBits) == prefix;
-    };
-    tbb::combinable<std::vector<uint64_t>> counts([] { return std::vector<uint64_t>(kDigits, 0); });
-    tbb::parallel_for(tbb::blocked_range<uint64_t>(0, count, 1 << 14),
-                      [&](const tbb::blocked_range<uint64_t> &r) {
-                        std::vector<uint64_t> &local = counts.local();
-                        for (uint64_t c = r.begin(); c < r.end(); ++c)
-                          if (const uint64_t bits = orderedBits(value(c)); inPrefix(bits))
-                            ++local[(bits >> shift) & (kDigits - 1)];
-                      });
-    std::vector<uint64_t> total(kDigits, 0);
-    counts.combine_each([&](const std::vector<uint64_t> &local) {
-      for (size_t d = 0; d < kDigits; ++d)
-        total[d] += local[d];
-    });
-    size_t digit = 0;
-    while (rank >= total[digit])
-      rank -= total[digit++];
-    prefix = prefix << kDigitBits | digit;
-    if (shift == 0)
-      return fromOrderedBits(prefix);
-    if (total[digit] > gatherAtMost)
+  // Where each rank's search stands: the value at it has the digits `prefix` above bit `shift`, and is the
+  // `rank`-th of the values that have them.
+  struct Search {
+    uint64_t rank, prefix = 0;
+    int shift = 64;
+    bool gather = false, done = false;
+  };
+  std::vector<Search> searches;
+  for (const uint64_t rank : ranks)
+    searches.push_back({rank});
+  std::vector<double> found(ranks.size());
+  // Searches that stand at the same digits share each pass: the values with them, counted or gathered.
+  const auto groupsOf = [&](bool gather) {
+    std::vector<std::pair<uint64_t, int>> groups;
+    for (const Search &search : searches)
+      if (!search.done && search.gather == gather &&
+          std::find(groups.begin(), groups.end(), std::pair{search.prefix, search.shift}) == groups.end())
+        groups.emplace_back(search.prefix, search.shift);
+    return groups;
+  };
+  const auto groupOf = [](const std::vector<std::pair<uint64_t, int>> &groups, const Search &search) {
+    return size_t(std::find(groups.begin(), groups.end(), std::pair{search.prefix, search.shift}) -
+                  groups.begin());
+  };
+  const auto inGroup = [](uint64_t bits, const std::pair<uint64_t, int> &group) {
+    return group.second == 64 || bits >> group.second == group.first;
+  };
+  for (;;) {
+    // Of the values of each group's digits, how many have each next digit.
+    const std::vector<std::pair<uint64_t, int>> counted = groupsOf(false);
+    if (!counted.empty()) {
+      tbb::combinable<std::vector<uint64_t>> counts(
+          [&] { return std::vector<uint64_t>(counted.size() * kDigits, 0); });
+      tbb::parallel_for(
+          tbb::blocked_range<uint64_t>(0, count, 1 << 14), [&](const tbb::blocked_range<uint64_t> &r) {
+            std::vector<uint64_t> &local = counts.local();
+            for (uint64_t c = r.begin(); c < r.end(); ++c) {
+              const uint64_t bits = orderedBits(value(c));
+              for (size_t g = 0; g < counted.size(); ++g)
+                if (inGroup(bits, counted[g]))
+                  ++local[g * kDigits + ((bits >> (counted[g].second - kDigitBits)) & (kDigits - 1))];
+            }
+          });
+      std::vector<uint64_t> total(counted.size() * kDigits, 0);
+      counts.combine_each([&](const std::vector<uint64_t> &local) {
+        for (size_t d = 0; d < total.size(); ++d)
+          total[d] += local[d];
+      });
+      for (size_t i = 0; i < searches.size(); ++i) {
+        Search &search = searches[i];
+        if (search.done || search.gather)
+          continue;
+        const uint64_t *digits = total.data() + groupOf(counted, search) * kDigits;
+        size_t digit = 0;
+        while (search.rank >= digits[digit])
+          search.rank -= digits[digit++];
+        search.prefix = search.prefix << kDigitBits | digit;
+        search.shift -= kDigitBits;
+        if (search.shift == 0) {
+          found[i] = fromOrderedBits(search.prefix);
+          search.done = true;
+        } else {
+          search.gather = digits[digit] <= gatherAtMost; // few enough to select among
+        }
+      }
+    }
+    const std::vector<std::pair<uint64_t, int>> gathered = groupsOf(true);
+    if (gathered.empty()) {
+      if (counted.empty())
+        return found;
       continue;
-    // Few enough: gather them and select among them.
-    tbb::combinable<std::vector<double>> gathered;
+    }
+    tbb::combinable<std::vector<std::vector<double>>> lists(
+        [&] { return std::vector<std::vector<double>>(gathered.size()); });
     tbb::parallel_for(tbb::blocked_range<uint64_t>(0, count, 1 << 14),
                       [&](const tbb::blocked_range<uint64_t> &r) {
-                        std::vector<double> &local = gathered.local();
-                        for (uint64_t c = r.begin(); c < r.end(); ++c)
-                          if (const double v = value(c); orderedBits(v) >> shift == prefix)
-                            local.push_back(v);
+                        std::vector<std::vector<double>> &local = lists.local();
+                        for (uint64_t c = r.begin(); c < r.end(); ++c) {
+                          const double v = value(c);
+                          const uint64_t bits = orderedBits(v);
+                          for (size_t g = 0; g < gathered.size(); ++g)
+                            if (inGroup(bits, gathered[g]))
+                              local[g].push_back(v);
+                        }
                       });
-    std::vector<double> values;
-    values.reserve(total[digit]);
-    gathered.combine_each(
-        [&](const std::vector<double> &local) { values.insert(values.end(), local.begin(), local.end()); });
-    auto it = values.begin() + std::ptrdiff_t(rank);
-    std::nth_element(values.begin(), it, values.end());
-    return *it;
+    std::vector<std::vector<double>> values(gathered.size());
+    lists.combine_each([&](const std::vector<std::vector<double>> &local) {
+      for (size_t g = 0; g < values.size(); ++g)
+        values[g].insert(values[g].end(), local[g].begin(), local[g].end());
+    });
+    for (size_t i = 0; i < searches.size(); ++i) {
+      Search &search = searches[i];
+      if (search.done || !search.gather)
+        continue;
+      std::vector<double> &group = values[groupOf(gathered, search)];
+      const auto at = group.begin() + std::ptrdiff_t(search.rank);
+      std::nth_element(group.begin(), at, group.end());
+      found[i] = *at;
+      search.done = true;
+    }
   }
+}
+
+double selectRank(uint64_t count, uint64_t rank, const std::function<double(uint64_t)> &value,
+                  uint64_t gatherAtMost) {
+  return selectRanks(count, {rank}, value, gatherAtMost)[0];
 }
 
 VolumeStats volumeStats(const Mesh &mesh) {
@@ -147,24 +209,13 @@ VolumeStats volumeStats(const Mesh &mesh) {
   // Selected by a radix select that computes the volumes again on each pass rather than keeping them (8
   // bytes a cell).
   auto volume = [&](uint64_t c) { return cellVolume(view, c); };
-  using Extremes = std::pair<double, double>;
-  const Extremes extremes = tbb::parallel_reduce(
-      tbb::blocked_range<uint64_t>(0, count, 1 << 14), Extremes{INFINITY, -INFINITY},
-      [&](const tbb::blocked_range<uint64_t> &r, Extremes e) {
-        for (uint64_t c = r.begin(); c < r.end(); ++c) {
-          const double v = volume(c);
-          e = {std::min(e.first, v), std::max(e.second, v)};
-        }
-        return e;
-      },
-      [](Extremes a, Extremes b) {
-        return Extremes{std::min(a.first, b.first), std::max(a.second, b.second)};
-      });
-  stats.min = extremes.first;
-  stats.max = extremes.second;
-  stats.median = selectRank(count, count / 2, volume);
-  stats.p1 = selectRank(count, count / 100, volume);
-  stats.p99 = selectRank(count, count - 1 - count / 100, volume);
+  const std::vector<double> at =
+      selectRanks(count, {0, count / 100, count / 2, count - 1 - count / 100, count - 1}, volume);
+  stats.min = at[0];
+  stats.p1 = at[1];
+  stats.median = at[2];
+  stats.p99 = at[3];
+  stats.max = at[4];
   stats.medianPerTet = stats.median;
   if (mesh.tetCount() != count)
     stats.medianPerTet = selectRank(count, count / 2, [&](uint64_t c) {

@@ -6,6 +6,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <vector>
 
 namespace uvr {
 
@@ -19,6 +20,11 @@ VolumeStats volumeStats(const Mesh &mesh);
 /// `gatherAtMost` are left to gather and select among.
 double selectRank(uint64_t count, uint64_t rank, const std::function<double(uint64_t)> &value,
                   uint64_t gatherAtMost = uint64_t(1) << 22);
+
+/// selectRank for each of `ranks` at once: the searches that stand at the same digits share each pass.
+std::vector<double> selectRanks(uint64_t count, const std::vector<uint64_t> &ranks,
+                                const std::function<double(uint64_t)> &value,
+                                uint64_t gatherAtMost = uint64_t(1) << 22);
 
 /// Range of a field's finite values; {0, 0} when it has none.
 ValueRange valueRange(const ScalarField &field);
