@@ -2,9 +2,13 @@
 
 #include <uvr/error.h>
 
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
+#include <atomic>
 #include <bit>
 #include <cstdint>
+#include <iterator>
 #include <span>
 #include <string>
 #include <unordered_map>
@@ -59,44 +63,82 @@ bool touches(const Box3f &a, const Box3f &b) {
 namespace {
 
 /// The cells for which `keep(cornerBox)` holds, with fields `fields`, and the points they use (in their
-/// order in `mesh`).
+/// order in `mesh`). On all cores: which cells are kept, block by block, then where each block's go.
 template <class Keep>
 VolumeMesh selectCells(const VolumeMesh &mesh, const std::vector<int> &fields, const Keep &keep) {
   const std::span<const Vec3f> points = mesh.points();
+  // Cells are numbered tets, pyramids, wedges, hexahedra: the type of each from where its type's run starts.
+  uint64_t typeStart[std::size(kCellTypes) + 1] = {0};
+  for (size_t t = 0; t < std::size(kCellTypes); ++t)
+    typeStart[t + 1] = typeStart[t] + mesh.cells(kCellTypes[t]).size() / size_t(cornerCount(kCellTypes[t]));
+  const uint64_t cellCount = typeStart[std::size(kCellTypes)];
+  const auto cellAt = [&](uint64_t cell, CellType &type) {
+    size_t t = 0;
+    while (cell >= typeStart[t + 1])
+      ++t;
+    type = kCellTypes[t];
+    const size_t n = size_t(cornerCount(type));
+    return mesh.cells(type).subspan(size_t(cell - typeStart[t]) * n, n);
+  };
+  constexpr uint64_t kBlock = uint64_t(1) << 15;
+  const uint64_t blocks = (cellCount + kBlock - 1) / kBlock;
+  std::vector<uint8_t> kept(cellCount);
+  std::vector<uint64_t> blockCells(blocks + 1, 0), blockCorners(blocks + 1, 0); // then where each block's go
+  tbb::parallel_for(uint64_t(0), blocks, [&](uint64_t b) {
+    for (uint64_t c = b * kBlock; c < std::min(cellCount, (b + 1) * kBlock); ++c) {
+      CellType type;
+      const std::span<const uint32_t> corners = cellAt(c, type);
+      if ((kept[c] = keep(cornerBounds(points, corners)))) {
+        ++blockCells[b + 1];
+        blockCorners[b + 1] += corners.size();
+      }
+    }
+  });
+  for (uint64_t b = 0; b < blocks; ++b) {
+    blockCells[b + 1] += blockCells[b];
+    blockCorners[b + 1] += blockCorners[b];
+  }
   constexpr uint32_t kUnused = ~0u;
   std::vector<uint32_t> newIndex(points.size(), kUnused);
-  std::vector<int64_t> offsets{0}, connectivity;
-  std::vector<uint8_t> types;
+  std::vector<int64_t> offsets(blockCells[blocks] + 1, 0), connectivity(blockCorners[blocks]);
+  std::vector<uint8_t> types(blockCells[blocks]);
   std::vector<std::vector<float>> cellValues(fields.size());
   std::vector<std::span<const float>> cellSpans(fields.size());
   for (size_t f = 0; f < fields.size(); ++f)
-    if (mesh.field(fields[f]).centering == Centering::Cell)
+    if (mesh.field(fields[f]).centering == Centering::Cell) {
       cellSpans[f] = mesh.fieldValues(fields[f]);
-  forEachCell(mesh, [&](uint64_t cell, CellType type, std::span<const uint32_t> corners) {
-    if (!keep(cornerBounds(points, corners)))
-      return;
-    for (const uint32_t v : corners) {
-      connectivity.push_back(int64_t(v));
-      newIndex[v] = 0;
+      cellValues[f].resize(types.size());
     }
-    offsets.push_back(int64_t(connectivity.size()));
-    types.push_back(uint8_t(type));
-    for (size_t f = 0; f < fields.size(); ++f)
-      if (!cellSpans[f].empty())
-        cellValues[f].push_back(cellSpans[f][cell]);
+  tbb::parallel_for(uint64_t(0), blocks, [&](uint64_t b) {
+    uint64_t cellOut = blockCells[b], cornerOut = blockCorners[b];
+    for (uint64_t c = b * kBlock; c < std::min(cellCount, (b + 1) * kBlock); ++c) {
+      if (!kept[c])
+        continue;
+      CellType type;
+      for (const uint32_t v : cellAt(c, type)) {
+        connectivity[cornerOut++] = int64_t(v);
+        std::atomic_ref<uint32_t>(newIndex[v]).store(0, std::memory_order_relaxed);
+      }
+      offsets[cellOut + 1] = int64_t(cornerOut);
+      types[cellOut] = uint8_t(type);
+      for (size_t f = 0; f < fields.size(); ++f)
+        if (!cellSpans[f].empty())
+          cellValues[f][cellOut] = cellSpans[f][c];
+      ++cellOut;
+    }
   });
-  std::vector<float> kept;
+  std::vector<float> keptPoints;
   uint32_t count = 0;
   for (size_t v = 0; v < points.size(); ++v)
     if (newIndex[v] != kUnused) {
       newIndex[v] = count++;
-      kept.insert(kept.end(), {points[v].x, points[v].y, points[v].z});
+      keptPoints.insert(keptPoints.end(), {points[v].x, points[v].y, points[v].z});
     }
-  for (int64_t &v : connectivity)
-    v = newIndex[size_t(v)];
+  tbb::parallel_for(size_t(0), connectivity.size(),
+                    [&](size_t i) { connectivity[i] = newIndex[size_t(connectivity[i])]; });
   std::vector<std::vector<float>> pointValues(fields.size());
   MeshArrays arrays;
-  arrays.points = ArrayView(std::span<const float>(kept), 3);
+  arrays.points = ArrayView(std::span<const float>(keptPoints), 3);
   arrays.offsets = offsets;
   arrays.connectivity = connectivity;
   arrays.types = types;
