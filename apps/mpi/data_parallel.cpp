@@ -83,7 +83,8 @@ VolumeMesh selectCells(const VolumeMesh &mesh, const std::vector<int> &fields, c
   constexpr uint64_t kBlock = uint64_t(1) << 15;
   const uint64_t blocks = (cellCount + kBlock - 1) / kBlock;
   std::vector<uint8_t> kept(cellCount);
-  std::vector<uint64_t> blockCells(blocks + 1, 0), blockCorners(blocks + 1, 0); // then where each block's go
+  // Each block's kept cells and their corners, counted at b + 1, then summed: where the block's go.
+  std::vector<uint64_t> blockCells(blocks + 1, 0), blockCorners(blocks + 1, 0);
   tbb::parallel_for(uint64_t(0), blocks, [&](uint64_t b) {
     for (uint64_t c = b * kBlock; c < std::min(cellCount, (b + 1) * kBlock); ++c) {
       CellType type;
