@@ -2,11 +2,16 @@
 #include "mesh/mesh_stats.h"
 #include "mesh/procedural_mesh.h"
 
+#include <uvr/error.h>
+#include <uvr/mesh.h>
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
 #include <set>
+#include <string>
+#include <vector>
 
 using namespace uvr;
 
@@ -103,4 +108,87 @@ TEST(SpatialOrder, NumbersPointsByFirstUseInLargeMeshes) {
   const int pointField = mesh.findField("f");
   for (size_t v = 0; v < mesh.points.size(); ++v)
     ASSERT_NEAR(mesh.fields[size_t(pointField)].values[v], field(mesh.points[v]), 1e-4f);
+}
+
+// A selection keeps each type's chosen cells in their order with their corners and cell values, numbers the
+// points they use (and no others) by first use with their values, and splits the numbering as a large mesh
+// does.
+TEST(SpatialOrder, SelectedCellsKeepOrderValuesAndFirstUseNumbering) {
+  const Mesh mesh =
+      buildMesh(makePyramidsAndTets(24, {{0.f, 0.f, 0.f}, {1.f, 1.f, 1.f}}, field, 0.2f), "mixed");
+  ASSERT_GT(mesh.pyramidCount(), size_t(1) << 16);
+  ASSERT_GT(mesh.tetCount(), 0u);
+  const int pointField = mesh.findField("f"), cellField = mesh.findField("f_cell");
+  const auto cornersOf = [](const Mesh &m, const UninitVector<uint32_t> &cells, size_t c, size_t n) {
+    std::vector<float> corners;
+    for (size_t i = 0; i < n; ++i) {
+      const Vec3f p = m.points[cells[c * n + i]];
+      corners.insert(corners.end(), {p.x, p.y, p.z});
+    }
+    return corners;
+  };
+  std::vector<uint8_t> keep(mesh.cellCount());
+  for (size_t c = 0; c < keep.size(); ++c)
+    keep[c] = uint8_t(c % 7 != 3 && (c / 1000) % 3 != 1);
+  const std::vector<int> fields = {cellField, pointField};
+  const Mesh piece = selectCells(mesh, keep, fields);
+
+  size_t first = 0, kept = 0;
+  auto checkType = [&](const UninitVector<uint32_t> &from, const UninitVector<uint32_t> &to, size_t n) {
+    const size_t count = from.size() / n;
+    size_t out = 0;
+    for (size_t c = 0; c < count; ++c) {
+      if (!keep[first + c])
+        continue;
+      ASSERT_LT(out, to.size() / n);
+      EXPECT_EQ(cornersOf(piece, to, out, n), cornersOf(mesh, from, c, n));
+      EXPECT_EQ(piece.fields[0].values[kept + out], mesh.fields[size_t(cellField)].values[first + c]);
+      ++out;
+    }
+    EXPECT_EQ(out, to.size() / n);
+    first += count;
+    kept += out;
+  };
+  checkType(mesh.tets, piece.tets, 4);
+  checkType(mesh.pyramids, piece.pyramids, 5);
+  EXPECT_EQ(piece.fields.size(), 2u);
+  EXPECT_EQ(piece.fields[0].values.size(), piece.cellCount());
+  EXPECT_EQ(piece.fields[1].centering, Centering::Point);
+
+  int64_t largest = -1;
+  bool firstUseOrder = true;
+  for (const auto *cells : {&piece.tets, &piece.pyramids})
+    for (const uint32_t v : *cells) {
+      firstUseOrder &= int64_t(v) <= largest + 1;
+      largest = std::max(largest, int64_t(v));
+    }
+  EXPECT_TRUE(firstUseOrder);
+  EXPECT_EQ(largest + 1, int64_t(piece.points.size()));
+  ASSERT_EQ(piece.fields[1].values.size(), piece.points.size());
+  for (size_t v = 0; v < piece.points.size(); ++v)
+    ASSERT_NEAR(piece.fields[1].values[v], field(piece.points[v]), 1e-4f);
+
+  // Every cell: the mesh again; none: an empty one.
+  const Mesh all = selectCells(mesh, std::vector<uint8_t>(mesh.cellCount(), 1), fields);
+  EXPECT_EQ(all.tets, mesh.tets);
+  EXPECT_EQ(all.pyramids, mesh.pyramids);
+  EXPECT_EQ(all.points.size(), mesh.points.size());
+  const Mesh none = selectCells(mesh, std::vector<uint8_t>(mesh.cellCount(), 0), fields);
+  EXPECT_EQ(none.cellCount(), 0u);
+  EXPECT_TRUE(none.points.empty());
+}
+
+TEST(SpatialOrder, VolumeMeshSelectionChecksItsArguments) {
+  const VolumeMesh mesh = VolumeMesh::load(std::string(UVR_TEST_DATA) + "/../../data/disk_out_ref.vtu");
+  std::vector<uint8_t> keep(mesh.cellCount(), 0);
+  std::fill(keep.begin(), keep.begin() + ptrdiff_t(keep.size() / 2), uint8_t(1));
+  const VolumeMesh half = mesh.selectCells(keep, {1, 0});
+  EXPECT_EQ(half.cellCount(), keep.size() / 2);
+  ASSERT_EQ(half.fieldCount(), 2);
+  EXPECT_EQ(half.field(0).name, mesh.field(1).name);
+  EXPECT_EQ(half.source(), mesh.source());
+  keep.pop_back();
+  EXPECT_THROW(mesh.selectCells(keep, {0}), Error);
+  keep.push_back(1);
+  EXPECT_THROW(mesh.selectCells(keep, {mesh.fieldCount()}), Error);
 }

@@ -2,13 +2,12 @@
 
 #include <uvr/error.h>
 
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
-#include <atomic>
 #include <bit>
 #include <cstdint>
-#include <iterator>
 #include <span>
 #include <string>
 #include <unordered_map>
@@ -63,99 +62,24 @@ bool touches(const Box3f &a, const Box3f &b) {
 namespace {
 
 /// The cells for which `keep(cornerBox)` holds, with fields `fields`, and the points they use (in their
-/// order in `mesh`). On all cores: which cells are kept, block by block, then where each block's go.
+/// order in `mesh`); which are kept is decided on all cores, block by block.
 template <class Keep>
 VolumeMesh selectCells(const VolumeMesh &mesh, const std::vector<int> &fields, const Keep &keep) {
   const std::span<const Vec3f> points = mesh.points();
-  // Cells are numbered tets, pyramids, wedges, hexahedra: the type of each from where its type's run starts.
-  uint64_t typeStart[std::size(kCellTypes) + 1] = {0};
-  for (size_t t = 0; t < std::size(kCellTypes); ++t)
-    typeStart[t + 1] = typeStart[t] + mesh.cells(kCellTypes[t]).size() / size_t(cornerCount(kCellTypes[t]));
-  const uint64_t cellCount = typeStart[std::size(kCellTypes)];
-  const auto cellAt = [&](uint64_t cell, CellType &type) {
-    size_t t = 0;
-    while (cell >= typeStart[t + 1])
-      ++t;
-    type = kCellTypes[t];
+  std::vector<uint8_t> kept(mesh.cellCount());
+  uint64_t first = 0;
+  for (const CellType type : kCellTypes) {
     const size_t n = size_t(cornerCount(type));
-    return mesh.cells(type).subspan(size_t(cell - typeStart[t]) * n, n);
-  };
-  constexpr uint64_t kBlock = uint64_t(1) << 15;
-  const uint64_t blocks = (cellCount + kBlock - 1) / kBlock;
-  std::vector<uint8_t> kept(cellCount);
-  // Each block's kept cells and their corners, counted at b + 1, then summed: where the block's go.
-  std::vector<uint64_t> blockCells(blocks + 1, 0), blockCorners(blocks + 1, 0);
-  tbb::parallel_for(uint64_t(0), blocks, [&](uint64_t b) {
-    for (uint64_t c = b * kBlock; c < std::min(cellCount, (b + 1) * kBlock); ++c) {
-      CellType type;
-      const std::span<const uint32_t> corners = cellAt(c, type);
-      if ((kept[c] = keep(cornerBounds(points, corners)))) {
-        ++blockCells[b + 1];
-        blockCorners[b + 1] += corners.size();
-      }
-    }
-  });
-  for (uint64_t b = 0; b < blocks; ++b) {
-    blockCells[b + 1] += blockCells[b];
-    blockCorners[b + 1] += blockCorners[b];
+    const std::span<const uint32_t> corners = mesh.cells(type);
+    const uint64_t count = corners.size() / n;
+    tbb::parallel_for(tbb::blocked_range<uint64_t>(0, count, uint64_t(1) << 15),
+                      [&](const tbb::blocked_range<uint64_t> &r) {
+                        for (uint64_t c = r.begin(); c < r.end(); ++c)
+                          kept[first + c] = keep(cornerBounds(points, corners.subspan(c * n, n)));
+                      });
+    first += count;
   }
-  constexpr uint32_t kUnused = ~0u;
-  std::vector<uint32_t> newIndex(points.size(), kUnused);
-  std::vector<int64_t> offsets(blockCells[blocks] + 1, 0), connectivity(blockCorners[blocks]);
-  std::vector<uint8_t> types(blockCells[blocks]);
-  std::vector<std::vector<float>> cellValues(fields.size());
-  std::vector<std::span<const float>> cellSpans(fields.size());
-  for (size_t f = 0; f < fields.size(); ++f)
-    if (mesh.field(fields[f]).centering == Centering::Cell) {
-      cellSpans[f] = mesh.fieldValues(fields[f]);
-      cellValues[f].resize(types.size());
-    }
-  tbb::parallel_for(uint64_t(0), blocks, [&](uint64_t b) {
-    uint64_t cellOut = blockCells[b], cornerOut = blockCorners[b];
-    for (uint64_t c = b * kBlock; c < std::min(cellCount, (b + 1) * kBlock); ++c) {
-      if (!kept[c])
-        continue;
-      CellType type;
-      for (const uint32_t v : cellAt(c, type)) {
-        connectivity[cornerOut++] = int64_t(v);
-        std::atomic_ref<uint32_t>(newIndex[v]).store(0, std::memory_order_relaxed);
-      }
-      offsets[cellOut + 1] = int64_t(cornerOut);
-      types[cellOut] = uint8_t(type);
-      for (size_t f = 0; f < fields.size(); ++f)
-        if (!cellSpans[f].empty())
-          cellValues[f][cellOut] = cellSpans[f][c];
-      ++cellOut;
-    }
-  });
-  std::vector<float> keptPoints;
-  uint32_t count = 0;
-  for (size_t v = 0; v < points.size(); ++v)
-    if (newIndex[v] != kUnused) {
-      newIndex[v] = count++;
-      keptPoints.insert(keptPoints.end(), {points[v].x, points[v].y, points[v].z});
-    }
-  tbb::parallel_for(size_t(0), connectivity.size(),
-                    [&](size_t i) { connectivity[i] = newIndex[size_t(connectivity[i])]; });
-  std::vector<std::vector<float>> pointValues(fields.size());
-  MeshArrays arrays;
-  arrays.points = ArrayView(std::span<const float>(keptPoints), 3);
-  arrays.offsets = offsets;
-  arrays.connectivity = connectivity;
-  arrays.types = types;
-  for (size_t f = 0; f < fields.size(); ++f) {
-    const FieldInfo field = mesh.field(fields[f]);
-    if (field.centering == Centering::Point) {
-      const std::span<const float> values = mesh.fieldValues(fields[f]);
-      for (size_t v = 0; v < points.size(); ++v)
-        if (newIndex[v] != kUnused)
-          pointValues[f].push_back(values[v]);
-    }
-    const bool perCell = field.centering == Centering::Cell;
-    arrays.fields.push_back({field.name, field.centering,
-                             ArrayView(std::span<const float>(perCell ? cellValues[f] : pointValues[f]))});
-  }
-  return VolumeMesh::fromArrays(arrays, mesh.source());
+  return mesh.selectCells(kept, fields);
 }
 
 std::vector<int> allFields(const VolumeMesh &mesh) {

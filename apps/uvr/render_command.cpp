@@ -324,12 +324,12 @@ void runRenderParallel(const RenderCommandOptions &o) {
       whole.regions = splitIntoRegions(mesh, group.size());
       const Box3f &region = whole.regions.regions[size_t(group.rank())];
       part.emplace(meshPiece(mesh, loaded->fieldIndex, region));
+      fileLoadMs = loaded->loadMs;
+      loaded.reset(); // the piece is all this rank keeps: gone before the partitions below are built
       // Each rank's partitions within its region, not the whole mesh's on every rank.
       share = part->stepScaleShare(region, whole.bounds,
                                    o.view.leafSize != kAutoLeafSize ? o.view.leafSize : whole.leafSize);
-      fileLoadMs = loaded->loadMs;
-      loadMs = loaded->loadMs + pieceTimer.milliseconds();
-      loaded.reset(); // the piece is all this rank keeps
+      loadMs = fileLoadMs + pieceTimer.milliseconds();
     });
     whole.stepScales = VolumeMesh::stepScaleReference(gatherShares(group, share));
   }
@@ -405,6 +405,7 @@ void runRenderParallel(const RenderCommandOptions &o) {
   const std::vector<double> rankLoadMs = group.gather(loadMs);
   const std::vector<double> rankPeakBytes = group.gather(double(peakResidentBytes()));
   const std::vector<double> rankLoadPeakBytes = group.gather(double(loadPeakBytes));
+  const std::vector<double> rankGpuPeakBytes = group.gather(double(frame.stats.gpuPeakBytes));
   stats.samplesTotal = group.sumOf(stats.samplesTotal);
   stats.partitions = uint32_t(group.sumOf(stats.partitions));
   stats.partitionsSkipped = uint32_t(group.sumOf(stats.partitionsSkipped));
@@ -452,6 +453,8 @@ void runRenderParallel(const RenderCommandOptions &o) {
       };
       json["rank_peak_rss_bytes"] = bytes(rankPeakBytes);
       json["rank_load_peak_rss_bytes"] = bytes(rankLoadPeakBytes);
+      if (settings.backend == Backend::Cuda)
+        json["rank_gpu_peak_bytes"] = bytes(rankGpuPeakBytes);
       // Each rank's region within the mesh's bounds: where the split planes lie.
       nlohmann::json boxes = nlohmann::json::array();
       for (const Box3f &region : regions.regions) {

@@ -138,6 +138,11 @@ public:
   int chooseField(const std::string &name) const;
   /// A mesh with only the fields `indices`, in that order. Moves the data when this is its only handle.
   VolumeMesh withFields(const std::vector<int> &indices) &&;
+  /// The mesh of the cells where `keep` (one entry per cell, in the mesh's cell order) is nonzero, with the
+  /// fields `indices` and the points those cells use: a piece of this mesh, its cells in their order here,
+  /// made without the checks and the spatial sort that fromArrays would do again. Throws uvr::Error naming
+  /// the source when `keep` has not one entry per cell or an index names no field.
+  VolumeMesh selectCells(std::span<const uint8_t> keep, const std::vector<int> &indices) const;
 
   /// Computed once per mesh.
   VolumeStats volumeStats() const;

@@ -208,6 +208,16 @@ VolumeMesh VolumeMesh::withFields(const std::vector<int> &indices) && {
   return VolumeMesh(std::move(impl));
 }
 
+VolumeMesh VolumeMesh::selectCells(std::span<const uint8_t> keep, const std::vector<int> &indices) const {
+  if (keep.size() != cellCount())
+    throw Error(impl_->source, "",
+                "a selection of " + std::to_string(keep.size()) + " entries for " +
+                    std::to_string(cellCount()) + " cells");
+  for (int index : indices)
+    fieldAt(impl_->mesh, impl_->source, index);
+  return detail::Access::make(uvr::selectCells(impl_->mesh, keep, indices), impl_->source);
+}
+
 VolumeStats VolumeMesh::volumeStats() const {
   std::call_once(impl_->statsOnce, [&] { impl_->stats = uvr::volumeStats(impl_->mesh); });
   return impl_->stats;

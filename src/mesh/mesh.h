@@ -114,4 +114,9 @@ Mesh buildMesh(UninitVector<Vec3f> &&points, CellBuffers &&cells, std::vector<Sc
 /// queries then hit the cache. Files often list cells in no spatial order at all. Fields follow.
 void orderSpatially(Mesh &mesh);
 
+/// The cells of `mesh` where `keep` (one entry per cell, in cell order) is nonzero, with the fields
+/// `fields` of `mesh` and the points those cells use: each type's cells in their order in `mesh` (so still
+/// ordered spatially) and wound as there, the points numbered by first use. Nothing is checked again.
+Mesh selectCells(const Mesh &mesh, std::span<const uint8_t> keep, std::span<const int> fields);
+
 } // namespace uvr

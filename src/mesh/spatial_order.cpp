@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <array>
 #include <utility>
+#include <vector>
 
 namespace uvr {
 namespace {
@@ -100,6 +101,80 @@ Buffer<uint32_t> sortedOrder(Buffer<uint64_t> &keys) {
   if (std::is_sorted(keys.begin(), keys.end()))
     return {};
   return radixSortedIndices(keys);
+}
+
+namespace {
+
+/// The indices i of `keep` where keep[i] is nonzero, in order; in parallel, block by block.
+Buffer<uint32_t> keptIndices(std::span<const uint8_t> keep) {
+  constexpr size_t kBlock = size_t(1) << 16;
+  const size_t blocks = (keep.size() + kBlock - 1) / kBlock;
+  std::vector<size_t> start(blocks + 1, 0); // each block's count at b + 1, then where its indices go
+  parallelChunks(blocks, 1, [&](size_t begin, size_t end) {
+    for (size_t b = begin; b < end; ++b)
+      start[b + 1] = size_t(std::count_if(keep.begin() + ptrdiff_t(b * kBlock),
+                                          keep.begin() + ptrdiff_t(std::min(keep.size(), (b + 1) * kBlock)),
+                                          [](uint8_t k) { return k != 0; }));
+  });
+  for (size_t b = 0; b < blocks; ++b)
+    start[b + 1] += start[b];
+  Buffer<uint32_t> indices(start[blocks]);
+  parallelChunks(blocks, 1, [&](size_t begin, size_t end) {
+    for (size_t b = begin; b < end; ++b) {
+      size_t out = start[b];
+      for (size_t i = b * kBlock; i < std::min(keep.size(), (b + 1) * kBlock); ++i)
+        if (keep[i] != 0)
+          indices[out++] = uint32_t(i);
+    }
+  });
+  return indices;
+}
+
+} // namespace
+
+Mesh selectCells(const Mesh &mesh, std::span<const uint8_t> keep, std::span<const int> fields) {
+  // Each type array's kept cells, as indices into it: the order in which place and gather copy them.
+  std::array<Buffer<uint32_t>, 4> kept;
+  const std::array<size_t, 4> counts = {mesh.tetCount(), mesh.pyramidCount(), mesh.wedgeCount(),
+                                        mesh.hexCount()};
+  size_t firstCell = 0, keptCells = 0;
+  for (size_t t = 0; t < kept.size(); ++t) {
+    kept[t] = keptIndices(keep.subspan(firstCell, counts[t]));
+    firstCell += counts[t];
+    keptCells += kept[t].size();
+  }
+
+  Mesh piece;
+  FirstUseNumbering numbering(mesh.points.size());
+  auto placeCells = [&]<size_t Corners>(size_t t, const UninitVector<uint32_t> &from,
+                                        UninitVector<uint32_t> &to) {
+    to.resize(kept[t].size() * Corners);
+    if (!kept[t].empty())
+      numbering.place<Corners>(to.data(), from.data(), kept[t].size(), kept[t]);
+  };
+  placeCells.operator()<4>(0, mesh.tets, piece.tets);
+  placeCells.operator()<5>(1, mesh.pyramids, piece.pyramids);
+  placeCells.operator()<6>(2, mesh.wedges, piece.wedges);
+  placeCells.operator()<8>(3, mesh.hexes, piece.hexes);
+  numbering.gatherUsed<Vec3f>(mesh.points, piece.points);
+  for (const int f : fields) {
+    const ScalarField &field = mesh.fields[size_t(f)];
+    ScalarField &values =
+        piece.fields.emplace_back(ScalarField{field.name, field.centering, {}, field.components});
+    if (field.centering == Centering::Point) {
+      numbering.gatherUsed<float>(field.values, values.values);
+      continue;
+    }
+    values.values.resize(keptCells);
+    size_t from = 0, to = 0;
+    for (size_t t = 0; t < kept.size(); ++t) {
+      if (!kept[t].empty())
+        gather<1>(values.values.data() + to, field.values.data() + from, kept[t].size(), kept[t]);
+      from += counts[t];
+      to += kept[t].size();
+    }
+  }
+  return piece;
 }
 
 void FirstUseNumbering::renumberAfterFirstHalf(uint32_t *corners, size_t count,
