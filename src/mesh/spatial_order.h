@@ -110,10 +110,8 @@ public:
   /// Moves the points and point fields to their new numbers; once, after the last cells are placed.
   void reorderPoints(Mesh &mesh);
 
-  /// The points the placed cells use: as many as there are numbers.
-  uint32_t usedCount() const { return next_; }
-  /// Item newIndex of `to` (usedCount() items) becomes item i of `from`, for the points the placed cells
-  /// use; for cells placed from a mesh's selection, once, after the last are placed.
+  /// `to` holds an item for each point the placed cells use, at its new number, taken from `from` (an item
+  /// per old point); for cells placed from a mesh's selection, once, after the last are placed.
   template <typename T> void gatherUsed(std::span<const T> from, UninitVector<T> &to) const {
     to.resize(next_);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, from.size(), 1 << 16),
