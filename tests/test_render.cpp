@@ -206,6 +206,44 @@ TEST_P(Integrator, ConstantFieldGivesExponentialTransmittance) {
   }
 }
 
+// A ray ends at the termination opacity, and the light it would still let through takes the colour where it
+// ended: through a box of one colour, a ray that would have gone on to let through less than 0.2 % gives the
+// image of a ray that never ends, to the byte, rather than one 1 % darker, and is wholly opaque; a ray that
+// does not reach the termination opacity is as it was; and none is off by more than the 1 % of light left.
+TEST_P(Integrator, AnEndedRayGivesTheRestOfItsLightItsColour) {
+  const Mesh mesh = buildMesh(makeBoxGrid(CellType::Tetra, 8, kBox, [](Vec3f) { return 0.5f; }), "box");
+  Renderer renderer(mesh, mesh.findField("f"), 64);
+  ColorMap map = constantMap(0.5f);
+  map.rgbPoints = {0.f, 1.f, 0.6f, 0.2f, 1.f, 1.f, 0.6f, 0.2f};
+  renderer.setTransferFunction(TransferFunction(map, 0.f, 1.f));
+  for (RenderMode mode : {RenderMode::Reference, RenderMode::Skip, RenderMode::Full})
+    for (bool preintegrate : {false, true}) {
+      RenderSettings ending = settingsFor(mode, 0.01f, 0.04f);
+      ending.integrator.preintegrate = preintegrate;
+      RenderSettings endless = ending;
+      endless.integrator.terminationOpacity = 2.f;
+      const Frame ended = renderer.render(obliqueCamera(), ending);
+      const Frame whole = renderer.render(obliqueCamera(), endless);
+      const std::string name = std::string(modeName(mode)) + (preintegrate ? " preintegrated" : " point");
+      int opaque = 0;
+      for (size_t i = 0; i < ended.opacity.size(); ++i) {
+        int worstByte = 0;
+        for (size_t c = 3 * i; c < 3 * i + 3; ++c)
+          worstByte = std::max(worstByte, std::abs(int(ended.image.rgb[c]) - int(whole.image.rgb[c])));
+        EXPECT_LE(worstByte, 3) << name << " pixel " << i;
+        if (whole.opacity[i] >= 0.998f) {
+          EXPECT_EQ(ended.opacity[i], 1.f) << name << " pixel " << i;
+          EXPECT_LE(worstByte, 1) << name << " pixel " << i;
+          ++opaque;
+        } else if (!(ended.opacity[i] >= kTerminationOpacity)) {
+          EXPECT_FLOAT_EQ(ended.opacity[i], whole.opacity[i]) << name << " pixel " << i;
+          EXPECT_EQ(worstByte, 0) << name << " pixel " << i;
+        }
+      }
+      EXPECT_GT(opaque, 64 * 64 / 4) << name;
+    }
+}
+
 // Opacity constant and colour varying along x: partitions get different adaptive steps, up to s2 = 8·s1.
 // Each sample stands for the distance to the next one, across partition boundaries too, so transmittance
 // stays the analytic one to within one step (a sample on the mesh surface may miss it and take its step

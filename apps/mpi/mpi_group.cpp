@@ -1,5 +1,7 @@
 #include "mpi_group.h"
 
+#include <uvr/settings.h>
+
 #include <mpi.h>
 
 #include <algorithm>
@@ -229,12 +231,13 @@ uint64_t MpiGroup::composite(const std::vector<float> &rgba, int width, int heig
           received_.data() + receiveOffsets[size_t(r)] + size_t(y - rect.y0) * rowChannels(rect);
       for (float *out = row + 4 * size_t(rect.x0 - mine.x0), *end = row + 4 * size_t(rect.x1 - mine.x0);
            out != end; out += 4, layer += 4) {
-        // A ray stops once this opaque (the renderer's early termination): so does the composite, else the
-        // regions behind would add what a single process leaves out.
-        constexpr float kTerminationOpacity = 0.99f;
-        if (out[3] >= kTerminationOpacity)
+        // A ray stops once kTerminationOpacity opaque, the light it would still let through given the colour
+        // of what it last went through (compositeBehind): so does the composite, at a region's colour.
+        if (out[3] >= kTerminationOpacity || layer[3] == 0)
           continue;
-        const float through = (1.f - out[3]) / kChannelScale;
+        float through = (1.f - out[3]) / kChannelScale;
+        if (out[3] + through * float(layer[3]) >= kTerminationOpacity)
+          through = (1.f - out[3]) / float(layer[3]);
         for (int c = 0; c < 4; ++c)
           out[c] += through * float(layer[c]);
       }

@@ -79,6 +79,10 @@ MemoryLayout parseMemoryLayout(const std::string &name);
 /// The most isosurfaces a frame draws (FrameSettings::isoValues).
 constexpr uint32_t kMaxIsoSurfaces = 8;
 
+/// A ray stops once this opaque (early ray termination); what lies behind is taken to have the colour of
+/// the last stretch it went through (docs/design.md, "Early ray termination").
+constexpr float kTerminationOpacity = 0.99f;
+
 /// A leaf size that asks for the default: the cell count / 256, at least 64 (about 256 partitions).
 constexpr uint32_t kAutoLeafSize = 0;
 

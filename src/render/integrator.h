@@ -24,9 +24,15 @@ struct RayResult {
   uint32_t samples = 0;
 };
 
-/// Adds a segment of colour `c` (rgb, opacity) behind what `color` (premultiplied rgb, opacity) holds.
-UVR_HOST_DEVICE inline void compositeBehind(Vec4f &color, const Vec4f &c) {
-  const float weight = (1.f - color.w) * c.w;
+/// Adds a segment of colour `c` (rgb, opacity) behind what `color` (premultiplied rgb, opacity) holds. Where
+/// that makes the ray `terminationOpacity` opaque, the ray ends there, and the light it would still let
+/// through is given `c`'s colour: the rest of the ray taken to look like its last segment, not dropped, so
+/// that where a ray ends depends little on where it began (the ranks of a split mesh begin theirs at their
+/// regions' faces).
+UVR_HOST_DEVICE inline void compositeBehind(Vec4f &color, const Vec4f &c, float terminationOpacity) {
+  float weight = (1.f - color.w) * c.w;
+  if (color.w + weight >= terminationOpacity)
+    weight = 1.f - color.w;
   color.x += weight * c.x;
   color.y += weight * c.y;
   color.z += weight * c.z;
@@ -243,8 +249,10 @@ struct RayMarch : ShadeState<kShade || kIso>, IsoState<kIso> {
           if (shadesVolume())
             c = shade(c, sampler.pointVectorAt(this->shading->gradients, t));
         }
-        compositeBehind(color, {c.x, c.y, c.z,
-                                correctedOpacity(c.w, ((last ? kEnd : kNext) - k) * spacing, settings.unit)});
+        compositeBehind(
+            color,
+            {c.x, c.y, c.z, correctedOpacity(c.w, ((last ? kEnd : kNext) - k) * spacing, settings.unit)},
+            settings.terminationOpacity);
       }
       if (color.w >= settings.terminationOpacity) {
         opaque = true;
@@ -334,7 +342,7 @@ private:
       if (shadesVolume())
         c = shade(c, this->pendingGradient);
     }
-    compositeBehind(color, c);
+    compositeBehind(color, c, settings.terminationOpacity);
   }
 
   /// A cell field's segment from `tStart` whose two samples lie in cells apart, `exit` and `entry` past its
@@ -405,7 +413,7 @@ private:
       moved = moved || sampler.cell() != this->lastCell;
       const Vec3f gradient = sampler.pointVectorAt(this->shading->gradients, hit);
       const Vec3f rgb = shadeSurface(iso.colors[i], gradient, this->toEye, *this->shading);
-      compositeBehind(color, {rgb.x, rgb.y, rgb.z, iso.opacity});
+      compositeBehind(color, {rgb.x, rgb.y, rgb.z, iso.opacity}, settings.terminationOpacity);
       if (color.w >= settings.terminationOpacity)
         return; // the ray ends here: no sample follows
     }

@@ -34,8 +34,8 @@ UVR_HOST_DEVICE constexpr bool samplesAdaptively(RenderMode mode) {
 struct IntegratorSettings {
   RenderMode mode = RenderMode::Full;
   float s1 = 1.f, s2 = 1.f, p = 2.f;
-  float unit = 1.f;                 ///< opacity unit distance
-  float terminationOpacity = 0.99f; ///< early ray termination
+  float unit = 1.f;                               ///< opacity unit distance
+  float terminationOpacity = kTerminationOpacity; ///< early ray termination
   bool preintegrate = false; ///< composite segments pre-integrated: the backends pick integrateRay<.., true>
   /// Scale each partition's steps by its cells' size (PartitionsView::stepScale), on a grid of the finest
   /// scale's spacing, rather than one s1 for the whole mesh.
