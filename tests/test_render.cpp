@@ -7,6 +7,7 @@
 #include "mesh/procedural_mesh.h"
 #include "mesh/tet_neighbors.h"
 #include "render/boundary_crossings.h"
+#include "render/pixel.h"
 #include <uvr/error.h>
 #include <uvr/renderer.h>
 
@@ -380,6 +381,29 @@ TEST_P(Integrator, FrameKeepsWhatIsAskedAndAlwaysItsSampleTotals) {
   EXPECT_EQ(lean.image.rgb, kept.image.rgb);
   EXPECT_EQ(lean.samplesTotal, total);
   EXPECT_EQ(lean.samplesMax, most);
+
+  // The premultiplied colours alone, as floats and in 16 bits a channel: the same values, rounded, and over
+  // a black background the image's own.
+  settings.keepImage = false;
+  settings.keepPremultipliedRgba = true;
+  settings.keepPremultipliedRgba16 = true;
+  const Frame colours = renderer.render(obliqueCamera(), settings);
+  EXPECT_TRUE(colours.image.rgb.empty());
+  ASSERT_EQ(colours.premultipliedRgba.size(), 4 * kept.opacity.size());
+  ASSERT_EQ(colours.premultipliedRgba16.size(), colours.premultipliedRgba.size());
+  int opaque = 0;
+  for (size_t i = 0; i < colours.premultipliedRgba.size(); ++i) {
+    const float value = colours.premultipliedRgba[i];
+    EXPECT_EQ(colours.premultipliedRgba16[i], uint16_t(std::clamp(value, 0.f, 1.f) * 65535.f + 0.5f)) << i;
+    if (i % 4 == 3) {
+      EXPECT_FLOAT_EQ(value, kept.opacity[i / 4]) << i;
+      opaque += value > 0.5f;
+    } else {
+      EXPECT_EQ(PixelTarget::toByte(value), kept.image.rgb[3 * (i / 4) + i % 4]) << i;
+    }
+  }
+  EXPECT_GT(opaque, 0);
+  EXPECT_EQ(colours.samplesTotal, total);
 }
 
 TEST_P(Integrator, NoCracksAtPartitionBoundaries) {

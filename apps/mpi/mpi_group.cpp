@@ -116,17 +116,17 @@ template <class Row> void forRows(int begin, int end, const Row &row) {
 /// The smallest rectangle of each band of rows of a premultiplied RGBA image (band b: rows [bands[b],
 /// bands[b + 1]), bands[0] = 0) that holds every pixel of non-zero opacity (premultiplied, a pixel without
 /// opacity holds no colour), given that none lies outside `colour`; empty where none has.
-std::vector<PixelBox> coloredRects(const float *rgba, int width, const std::vector<int> &bands,
+std::vector<PixelBox> coloredRects(const uint16_t *rgba, int width, const std::vector<int> &bands,
                                    const PixelBox &colour) {
   std::vector<int> first(size_t(bands.back())), last(first.size());
   forRows(0, bands.back(), [&](int y) {
-    const float *row = rgba + size_t(y) * size_t(width) * 4;
+    const uint16_t *row = rgba + size_t(y) * size_t(width) * 4;
     int x0 = colour.x0, x1 = colour.x1;
     if (y < colour.y0 || y >= colour.y1)
       x1 = x0;
-    while (x0 < x1 && !(row[4 * x0 + 3] > 0.f))
+    while (x0 < x1 && row[4 * x0 + 3] == 0)
       ++x0;
-    while (x1 > x0 && !(row[4 * (x1 - 1) + 3] > 0.f))
+    while (x1 > x0 && row[4 * (x1 - 1) + 3] == 0)
       --x1;
     first[size_t(y)] = x0;
     last[size_t(y)] = x1;
@@ -144,28 +144,25 @@ std::vector<PixelBox> coloredRects(const float *rgba, int width, const std::vect
   return rects;
 }
 
-// 16 bits a channel: a thousandth of what an 8-bit image resolves, at half the bytes of floats.
+// The ranks' frames come 16 bits a channel (FrameSettings::keepPremultipliedRgba16): a thousandth of what an
+// 8-bit image resolves, at a quarter of the bytes of floats.
 constexpr float kChannelScale = 65535.f;
-uint16_t toChannel(float v) { return uint16_t(std::clamp(v, 0.f, 1.f) * kChannelScale + 0.5f); }
 
-/// Writes the rectangles' pixels of the image (`width` pixels a row, its first row `firstRow`) to `out`,
-/// rectangle r at offsets[r], 16 bits a channel.
-void pack(uint16_t *out, const float *rgba, int width, int firstRow, const std::vector<PixelBox> &rects,
+/// Copies the rectangles' pixels of the image (`width` pixels a row) to `out`, rectangle r at offsets[r].
+void pack(uint16_t *out, const uint16_t *rgba, int width, const std::vector<PixelBox> &rects,
           const std::vector<int> &offsets) {
   for (size_t r = 0; r < rects.size(); ++r) {
     const PixelBox &rect = rects[r];
     forRows(rect.y0, rect.y1, [&](int y) {
-      const float *from = rgba + (size_t(y - firstRow) * size_t(width) + size_t(rect.x0)) * 4;
-      uint16_t *to = out + offsets[r] + size_t(y - rect.y0) * rowChannels(rect);
-      for (size_t c = 0; c < rowChannels(rect); ++c)
-        to[c] = toChannel(from[c]);
+      const uint16_t *from = rgba + (size_t(y) * size_t(width) + size_t(rect.x0)) * 4;
+      std::copy(from, from + rowChannels(rect), out + offsets[r] + size_t(y - rect.y0) * rowChannels(rect));
     });
   }
 }
 
 } // namespace
 
-uint64_t MpiGroup::composite(const std::vector<float> &rgba, int width, int height,
+uint64_t MpiGroup::composite(const std::vector<uint16_t> &rgba, int width, int height,
                              const std::vector<int> &order, const PixelBox &colour, Vec3f background,
                              Image &image) {
   // Rank r composites rows [bands[r], bands[r + 1]).
@@ -189,7 +186,7 @@ uint64_t MpiGroup::composite(const std::vector<float> &rgba, int width, int heig
       sentBytes += uint64_t(sendCounts[r]) * sizeof(uint16_t);
   }
   sent_.resize(size_t(sentTotal));
-  pack(sent_.data(), rgba.data(), width, 0, sentRects, sendOffsets);
+  pack(sent_.data(), rgba.data(), width, sentRects, sendOffsets);
   static_assert(sizeof(PixelBox) == 4 * sizeof(int));
   MPI_Alltoall(sentRects.data(), 4, MPI_INT, receivedRects.data(), 4, MPI_INT, MPI_COMM_WORLD);
   for (size_t r = 0; r < ranks; ++r) {

@@ -366,9 +366,11 @@ void runRenderParallel(const RenderCommandOptions &o) {
   variances = {float(-group.maxOf(-double(variances.min))), float(group.maxOf(variances.max))};
   group.step([&] { renderer->setColorVarianceRange(variances); });
 
+  // What the composite takes, and no more: a GPU copies each buffer kept back to the host.
+  settings.keepImage = false;
   settings.keepOpacity = false;
   settings.keepSamplesPerPixel = !o.heatmap.empty();
-  settings.keepPremultipliedRgba = true;
+  settings.keepPremultipliedRgba16 = true;
   const std::vector<int> order = regions.frontToBack(camera.eye);
   const PixelBox colour =
       boxPixels(camera, settings.width, settings.height, regions.regions[size_t(group.rank())]);
@@ -387,7 +389,7 @@ void runRenderParallel(const RenderCommandOptions &o) {
     rankKernelTimes.push_back(frame.stats.gpuKernelMs);
     group.barrier(); // the composite's time, not the wait for the slowest rank's render
     const Timer compositeTimer;
-    sentBytes = group.composite(frame.premultipliedRgba, settings.width, settings.height, order, colour,
+    sentBytes = group.composite(frame.premultipliedRgba16, settings.width, settings.height, order, colour,
                                 settings.background, image);
     compositeTimes.push_back(compositeTimer.milliseconds());
     frameTimes.push_back(frameTimer.milliseconds());

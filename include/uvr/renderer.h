@@ -56,12 +56,16 @@ struct FrameStats {
 };
 
 struct FrameResult {
-  Image image;                           ///< RGB composited over the background, top row first
+  Image
+      image; ///< RGB composited over the background, top row first; rgb empty unless FrameSettings::keepImage
   std::vector<float> opacity;            ///< accumulated opacity per pixel, row-major; empty unless kept
   std::vector<uint32_t> samplesPerPixel; ///< row-major; empty unless kept
   /// Premultiplied red, green, blue and opacity per pixel, before the background, row-major, top row first;
   /// empty unless FrameSettings::keepPremultipliedRgba.
   std::vector<float> premultipliedRgba;
+  /// The same in 16 bits a channel, rounded (65535 for 1); empty unless
+  /// FrameSettings::keepPremultipliedRgba16.
+  std::vector<uint16_t> premultipliedRgba16;
   FrameStats stats;
 };
 

@@ -100,11 +100,15 @@ struct FrameSettings {
   int height = 1024;
   Vec3f background{0.f, 0.f, 0.f}; ///< RGB in [0, 1], under the volume
   Backend backend = Backend::Cpu;
+  bool keepImage = true;           ///< return the image composited over the background (FrameResult::image)
   bool keepOpacity = true;         ///< return the accumulated opacity per pixel
   bool keepSamplesPerPixel = true; ///< return the samples taken per pixel
   /// Return the premultiplied colour and opacity per pixel as floats, before the background: what frames of
   /// several pieces of a mesh are composited from.
   bool keepPremultipliedRgba = false;
+  /// The same in 16 bits a channel (65535 for 1): a quarter of the bytes, where a 16-bit channel suffices
+  /// (frames composited into 8-bit images).
+  bool keepPremultipliedRgba16 = false;
   /// Empty, or width x height distances from the eye, row-major, top row first: each pixel's ray ends there
   /// (+inf: it does not), so that opaque geometry drawn by another renderer (its depth buffer converted to
   /// distances) hides the volume behind it. Viewed, not copied: the array must outlive the frame.

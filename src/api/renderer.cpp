@@ -185,7 +185,8 @@ void VolumeRenderer::render(const Camera &camera, const FrameSettings &settings,
   validateSettings(settings);
   checkMemoryLimit("", "",
                    uint64_t(settings.width) * uint64_t(settings.height) *
-                       (kFrameBytesPerPixel + (settings.keepPremultipliedRgba ? 4 * sizeof(float) : 0)),
+                       (kFrameBytesPerPixel + (settings.keepPremultipliedRgba ? 4 * sizeof(float) : 0) +
+                        (settings.keepPremultipliedRgba16 ? 4 * sizeof(uint16_t) : 0)),
                    "a " + std::to_string(settings.width) + "x" + std::to_string(settings.height) + " frame");
   // The mesh's default step costs a pass over its cells, once: only where a setting asks for it.
   const bool defaults = !(settings.s1 > 0.f && settings.s2 > 0.f && settings.p > 0.f && settings.unit > 0.f);
@@ -232,9 +233,11 @@ void VolumeRenderer::render(const Camera &camera, const FrameSettings &settings,
   internal.width = s.width;
   internal.height = s.height;
   internal.backend = s.backend;
+  internal.keepImage = s.keepImage;
   internal.keepOpacity = s.keepOpacity;
   internal.keepSamplesPerPixel = s.keepSamplesPerPixel;
   internal.keepPremultipliedRgba = s.keepPremultipliedRgba;
+  internal.keepPremultipliedRgba16 = s.keepPremultipliedRgba16;
   internal.rayLimits = s.rayLimits.empty() ? nullptr : s.rayLimits.data();
 
   Frame frame; // the result's buffers, to be reused
@@ -242,6 +245,7 @@ void VolumeRenderer::render(const Camera &camera, const FrameSettings &settings,
   frame.opacity = std::move(result.opacity);
   frame.samplesPerPixel = std::move(result.samplesPerPixel);
   frame.premultipliedRgba = std::move(result.premultipliedRgba);
+  frame.premultipliedRgba16 = std::move(result.premultipliedRgba16);
   Renderer &renderer = impl_->renderer;
   const Timer timer;
   renderer.render(camera, internal, frame);
@@ -250,6 +254,7 @@ void VolumeRenderer::render(const Camera &camera, const FrameSettings &settings,
   result.opacity = std::move(frame.opacity);
   result.samplesPerPixel = std::move(frame.samplesPerPixel);
   result.premultipliedRgba = std::move(frame.premultipliedRgba);
+  result.premultipliedRgba16 = std::move(frame.premultipliedRgba16);
 
   FrameStats &stats = result.stats;
   stats = FrameStats{};

@@ -26,9 +26,11 @@ struct RenderSettings {
   Backend backend = Backend::Cpu;
   /// Per-pixel buffers a frame keeps besides the image (its sample totals are always there): a GPU frame
   /// copies each one back to the host.
+  bool keepImage = true;
   bool keepOpacity = true;
   bool keepSamplesPerPixel = true;
   bool keepPremultipliedRgba = false;
+  bool keepPremultipliedRgba16 = false;
   /// Null, or width x height distances, top row first, where each pixel's ray ends
   /// (FrameSettings::rayLimits).
   const float *rayLimits = nullptr;
@@ -41,8 +43,9 @@ struct RenderSettings {
 struct Frame {
   Image image;
   std::vector<float> opacity; ///< accumulated opacity per pixel, row-major, top row first; or empty
-  std::vector<uint32_t> samplesPerPixel; ///< row-major, top row first; or empty
-  std::vector<float> premultipliedRgba;  ///< 4 per pixel, before the background, row-major; or empty
+  std::vector<uint32_t> samplesPerPixel;     ///< row-major, top row first; or empty
+  std::vector<float> premultipliedRgba;      ///< 4 per pixel, before the background, row-major; or empty
+  std::vector<uint16_t> premultipliedRgba16; ///< the same, 65535 for 1; or empty
   uint64_t samplesTotal = 0;
   uint32_t samplesMax = 0;
   double kernelMs = 0.0; ///< the GPU time of the frame's kernels (CUDA), without copies; 0 on the CPU

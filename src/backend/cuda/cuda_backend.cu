@@ -153,6 +153,7 @@ struct CudaBackend::Impl {
   DeviceBuffer<uint8_t> rgb;
   DeviceBuffer<float> opacity;
   DeviceBuffer<float> rgba;
+  DeviceBuffer<uint16_t> rgba16;
   DeviceBuffer<uint32_t> samples;
   DeviceBuffer<SampleTotals> sampleTotals;
   DeviceBuffer<float> rayLimits;
@@ -344,10 +345,11 @@ SampleTotals CudaBackend::render(const CameraView &camera, const IntegratorSetti
   const int height = camera.height;
   SampleTotals samples;
   const size_t pixels = size_t(target.width) * size_t(height);
-  d.rgb.resize(3 * pixels);
+  d.rgb.resize(target.rgb ? 3 * pixels : 0);
   d.opacity.resize(target.opacity ? pixels : 0);
   d.samples.resize(target.samples ? pixels : 0);
   d.rgba.resize(target.rgba ? 4 * pixels : 0);
+  d.rgba16.resize(target.rgba16 ? 4 * pixels : 0);
   d.sampleTotals.resize(1);
   UVR_CUDA_CHECK(cudaMemsetAsync(d.sampleTotals.data(), 0, d.sampleTotals.bytes()));
   // The rays read their limits on the GPU.
@@ -355,10 +357,11 @@ SampleTotals CudaBackend::render(const CameraView &camera, const IntegratorSetti
   if (camera.limits)
     deviceCamera.limits = d.rayLimits.upload(camera.limits, pixels);
   PixelTarget device = target;
-  device.rgb = d.rgb.data();
+  device.rgb = target.rgb ? d.rgb.data() : nullptr;
   device.opacity = target.opacity ? d.opacity.data() : nullptr;
   device.samples = target.samples ? d.samples.data() : nullptr;
   device.rgba = target.rgba ? d.rgba.data() : nullptr;
+  device.rgba16 = target.rgba16 ? d.rgba16.data() : nullptr;
   const bool skipping = skipsSpace(settings.mode);
   const int trial = skipping ? d.skippingFrames : 0; // 1: rows timed, 2: tiles timed
   if (skipping && d.skippingFrames < 3)
@@ -399,7 +402,8 @@ SampleTotals CudaBackend::render(const CameraView &camera, const IntegratorSetti
                         {target.rgb, d.rgb.data(), d.rgb.bytes()},
                         {target.opacity, d.opacity.data(), d.opacity.bytes()},
                         {target.samples, d.samples.data(), d.samples.bytes()},
-                        {target.rgba, d.rgba.data(), d.rgba.bytes()}};
+                        {target.rgba, d.rgba.data(), d.rgba.bytes()},
+                        {target.rgba16, d.rgba16.data(), d.rgba16.bytes()}};
   size_t stagedBytes = 0;
   for (const Part &part : parts)
     stagedBytes += part.bytes;
@@ -453,8 +457,8 @@ SampleTotals CudaBackend::render(const CameraView &camera, const IntegratorSetti
 
 size_t CudaBackend::deviceMemoryBytes() const {
   const Impl &d = *impl_;
-  return deviceSceneBytes() + d.rgb.bytes() + d.opacity.bytes() + d.samples.bytes() + d.sampleTotals.bytes() +
-         d.crossings.bytes();
+  return deviceSceneBytes() + d.rgb.bytes() + d.opacity.bytes() + d.samples.bytes() + d.rgba.bytes() +
+         d.rgba16.bytes() + d.sampleTotals.bytes() + d.crossings.bytes();
 }
 
 size_t CudaBackend::devicePeakBytes() const {
