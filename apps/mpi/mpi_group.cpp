@@ -216,7 +216,17 @@ uint64_t MpiGroup::composite(const std::vector<uint16_t> &rgba, int width, int h
   if (!(mine.y0 < mine.y1))
     mine = {0, 0, bandBegin, bandBegin};
   band_.resize(4 * pixels(mine));
-  bandRgb_.resize(3 * pixels(mine));
+  // Rank 0 lays its band straight into the frame; the others into what they send it.
+  if (rank_ == 0) {
+    image.width = width;
+    image.height = height;
+    image.rgb.resize(3 * size_t(width) * size_t(height));
+  } else {
+    bandRgb_.resize(3 * pixels(mine));
+  }
+  const size_t outStride = rank_ == 0 ? 3 * size_t(width) : 3 * size_t(mine.x1 - mine.x0);
+  uint8_t *const out = rank_ == 0 ? image.rgb.data() + 3 * (size_t(mine.y0) * size_t(width) + size_t(mine.x0))
+                                  : bandRgb_.data();
   forRows(mine.y0, mine.y1, [&](int y) {
     float *row = band_.data() + size_t(y - mine.y0) * rowChannels(mine);
     std::fill(row, row + rowChannels(mine), 0.f);
@@ -226,61 +236,61 @@ uint64_t MpiGroup::composite(const std::vector<uint16_t> &rgba, int width, int h
         continue;
       const uint16_t *layer =
           received_.data() + receiveOffsets[size_t(r)] + size_t(y - rect.y0) * rowChannels(rect);
-      for (float *out = row + 4 * size_t(rect.x0 - mine.x0), *end = row + 4 * size_t(rect.x1 - mine.x0);
-           out != end; out += 4, layer += 4) {
+      for (float *pixel = row + 4 * size_t(rect.x0 - mine.x0), *end = row + 4 * size_t(rect.x1 - mine.x0);
+           pixel != end; pixel += 4, layer += 4) {
         // A ray stops once kTerminationOpacity opaque, the light it would still let through given the colour
         // of what it last went through (compositeBehind): so does the composite, at a region's colour.
-        if (out[3] >= kTerminationOpacity || layer[3] == 0)
+        if (pixel[3] >= kTerminationOpacity || layer[3] == 0)
           continue;
-        float through = (1.f - out[3]) / kChannelScale;
-        if (out[3] + through * float(layer[3]) >= kTerminationOpacity)
-          through = (1.f - out[3]) / float(layer[3]);
+        float through = (1.f - pixel[3]) / kChannelScale;
+        if (pixel[3] + through * float(layer[3]) >= kTerminationOpacity)
+          through = (1.f - pixel[3]) / float(layer[3]);
         for (int c = 0; c < 4; ++c)
-          out[c] += through * float(layer[c]);
+          pixel[c] += through * float(layer[c]);
       }
     }
-    uint8_t *to = bandRgb_.data() + 3 * size_t(y - mine.y0) * size_t(mine.x1 - mine.x0);
+    uint8_t *to = out + size_t(y - mine.y0) * outStride;
     for (const float *from = row, *end = row + rowChannels(mine); from != end; from += 4, to += 3)
       for (int c = 0; c < 3; ++c)
         to[c] = toByte(from[c] + (1.f - from[3]) * under[c]);
   });
 
-  // The composited bands' rectangles to rank 0, which lays them in the background.
+  // The composited bands' rectangles to rank 0, received straight into their place in the frame while it
+  // lays the background around them.
+  constexpr int kBandTag = 1;
   std::vector<PixelBox> bandRects(rank_ == 0 ? ranks : 0);
   MPI_Gather(&mine, 4, MPI_INT, bandRects.data(), 4, MPI_INT, 0, MPI_COMM_WORLD);
-  receivedTotal = 0;
-  for (size_t r = 0; r < bandRects.size(); ++r) {
-    receiveOffsets[r] = receivedTotal;
-    receiveCounts[r] = int(3 * pixels(bandRects[r]));
-    receivedTotal += receiveCounts[r];
-  }
-  gathered_.resize(size_t(receivedTotal));
-  MPI_Gatherv(bandRgb_.data(), int(bandRgb_.size()), MPI_UINT8_T, gathered_.data(), receiveCounts.data(),
-              receiveOffsets.data(), MPI_UINT8_T, 0, MPI_COMM_WORLD);
-  if (rank_ != 0)
+  if (rank_ != 0) {
+    if (!bandRgb_.empty())
+      MPI_Send(bandRgb_.data(), int(bandRgb_.size()), MPI_UINT8_T, 0, kBandTag, MPI_COMM_WORLD);
     return sentBytes + bandRgb_.size();
-  image.width = width;
-  image.height = height;
-  image.rgb.resize(3 * size_t(width) * size_t(height));
-  std::vector<const uint8_t *> rowFrom(size_t(height), nullptr); // each row's composited pixels, if any
-  std::vector<int> rowX0(rowFrom.size()), rowX1(rowFrom.size());
-  for (size_t r = 0; r < ranks; ++r)
-    for (int y = bandRects[r].y0; y < bandRects[r].y1; ++y) {
-      rowFrom[size_t(y)] = gathered_.data() + receiveOffsets[r] +
-                           3 * size_t(y - bandRects[r].y0) * size_t(bandRects[r].x1 - bandRects[r].x0);
-      rowX0[size_t(y)] = bandRects[r].x0;
-      rowX1[size_t(y)] = bandRects[r].x1;
+  }
+  std::vector<MPI_Request> requests;
+  for (size_t r = 1; r < ranks; ++r) {
+    const PixelBox &rect = bandRects[r];
+    if (pixels(rect) == 0)
+      continue;
+    MPI_Datatype rows;
+    MPI_Type_vector(rect.y1 - rect.y0, 3 * (rect.x1 - rect.x0), 3 * width, MPI_UINT8_T, &rows);
+    MPI_Type_commit(&rows);
+    requests.emplace_back();
+    MPI_Irecv(image.rgb.data() + 3 * (size_t(rect.y0) * size_t(width) + size_t(rect.x0)), 1, rows, int(r),
+              kBandTag, MPI_COMM_WORLD, &requests.back());
+    MPI_Type_free(&rows); // freed once the receive completes
+  }
+  std::vector<int> rowX0(size_t(height), width), rowX1(size_t(height), width); // each row's composited pixels
+  for (const PixelBox &rect : bandRects)
+    for (int y = rect.y0; y < rect.y1; ++y) {
+      rowX0[size_t(y)] = rect.x0;
+      rowX1[size_t(y)] = rect.x1;
     }
   forRows(0, height, [&](int y) {
     uint8_t *row = image.rgb.data() + 3 * size_t(y) * size_t(width);
-    const uint8_t *from = rowFrom[size_t(y)];
-    const size_t x0 = from ? size_t(rowX0[size_t(y)]) : size_t(width);
-    const size_t x1 = from ? size_t(rowX1[size_t(y)]) : size_t(width);
+    const size_t x0 = size_t(rowX0[size_t(y)]), x1 = size_t(rowX1[size_t(y)]);
     std::copy(backgroundRow.data(), backgroundRow.data() + 3 * x0, row);
-    if (from)
-      std::copy(from, from + 3 * (x1 - x0), row + 3 * x0);
     std::copy(backgroundRow.data() + 3 * x1, backgroundRow.data() + 3 * size_t(width), row + 3 * x1);
   });
+  MPI_Waitall(int(requests.size()), requests.data(), MPI_STATUSES_IGNORE);
   return sentBytes;
 }
 

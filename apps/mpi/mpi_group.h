@@ -68,7 +68,7 @@ private:
   // The composite's buffers, kept across frames: fresh pages each frame cost more than the copies.
   std::vector<uint16_t> sent_, received_;
   std::vector<float> band_;
-  std::vector<uint8_t> bandRgb_, gathered_;
+  std::vector<uint8_t> bandRgb_;
 };
 
 } // namespace uvr
