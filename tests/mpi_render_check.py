@@ -2,7 +2,8 @@
 """`mpirun -np 2` and `-np 4` against a single process: the same image (see LEAST_SSIM) in every mode, on a
 tet brain, disk_out_ref (hexahedra) and a mixed-element mesh, from outside the mesh, inside it and along the
 first split plane, with every rank reading the mesh and with each reading its share of a .pvtu of 4 pieces
-(`uvr convert --pieces 4`); and a rank that cannot open its file ends every rank with status 2.
+(`uvr convert --pieces 4`), compositing through shared memory and (UVR_MPI_COMPOSITE=messages) by messages;
+and a rank that cannot open its file ends every rank with status 2.
 
 Usage: mpi_render_check.py UVR_BINARY MPIEXEC SOURCE_DIR SHARED_DATA_DIR
 SHARED_DATA_DIR holds source/ch2better.nii.gz (or ch2better.nii.gz). UVR_MPI_CHECK_OPTIONS in the environment (e.g. "--backend cuda")
@@ -32,10 +33,10 @@ ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIR
 EXTRA = shlex.split(os.environ.get("UVR_MPI_CHECK_OPTIONS", ""))
 
 
-def run(command, expect=0, timeout=300):
+def run(command, expect=0, timeout=300, env=None):
     if "render" in command:
         command = command + EXTRA
-    result = subprocess.run(command, capture_output=True, text=True, env=ENV, timeout=timeout)
+    result = subprocess.run(command, capture_output=True, text=True, env=env or ENV, timeout=timeout)
     if result.returncode != expect:
         sys.exit(f"FAIL: {' '.join(command)} exited with {result.returncode}, expected {expect}:\n"
                  f"{result.stdout.strip()}\n{result.stderr.strip()}")
@@ -155,9 +156,12 @@ def main():
                     run(command + ["-o", single])
                     for ranks, source in ((2, mesh), (4, mesh), (2, pieces), (4, pieces)):
                         image = out(f"ranks{ranks}.png")
-                        run(mpirun(ranks) + [uvr, "render", source] + command[3:] + ["-o", image])
-                        ssim = json.loads(run([uvr, "compare", single, image, "--json"]).stdout)["ssim"]
+                        # Ranks on one node composite through shared memory; those reading pieces by messages.
                         read = "pieces" if source == pieces else "whole"
+                        env = dict(ENV, UVR_MPI_COMPOSITE="messages") if source == pieces else ENV
+                        run(mpirun(ranks) + [uvr, "render", source] + command[3:] + ["-o", image], env=env)
+                        ssim = json.loads(run([uvr, "compare", single, image, "--json"]).stdout)["ssim"]
+                        read += ", messages" if source == pieces else ", shared memory"
                         print(f"{name} {view} {mode}, {ranks} ranks, {read}: SSIM {ssim:.6f}", flush=True)
                         worst[mode] = min(worst[mode], ssim)
                         if ssim < LEAST_SSIM:

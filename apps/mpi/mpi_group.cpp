@@ -14,6 +14,40 @@
 
 namespace uvr {
 
+/// A window of memory that every rank on the node maps: each rank's frame's coloured rectangle, and after
+/// rank 0's the composited frame, which each rank lays its band of rows into.
+struct MpiGroup::SharedFrames {
+  MPI_Win window = MPI_WIN_NULL;
+  size_t pixels = 0;            // of the frames it holds
+  std::vector<uint16_t *> rgba; // each rank's rectangle
+  uint8_t *rgb = nullptr;       // the composited frame, in rank 0's part
+  SharedFrames(size_t framePixels, int rank, int ranks) : pixels(framePixels) {
+    const MPI_Aint bytes = MPI_Aint(4 * sizeof(uint16_t) * pixels + (rank == 0 ? 3 * pixels : 0));
+    void *mine = nullptr;
+    MPI_Win_allocate_shared(bytes, 1, MPI_INFO_NULL, MPI_COMM_WORLD, &mine, &window);
+    MPI_Win_lock_all(MPI_MODE_NOCHECK, window);
+    for (int r = 0; r < ranks; ++r) {
+      MPI_Aint size;
+      int unit;
+      void *base = nullptr;
+      MPI_Win_shared_query(window, r, &size, &unit, &base);
+      rgba.push_back(static_cast<uint16_t *>(base));
+      if (r == 0)
+        rgb = static_cast<uint8_t *>(base) + 4 * sizeof(uint16_t) * pixels;
+    }
+  }
+  ~SharedFrames() {
+    MPI_Win_unlock_all(window);
+    MPI_Win_free(&window);
+  }
+  /// What every rank wrote before, every rank sees after.
+  void fence() {
+    MPI_Win_sync(window);
+    MPI_Barrier(MPI_COMM_WORLD);
+    MPI_Win_sync(window);
+  }
+};
+
 MpiGroup::MpiGroup() {
   MPI_Init(nullptr, nullptr);
   MPI_Comm_rank(MPI_COMM_WORLD, &rank_);
@@ -23,9 +57,14 @@ MpiGroup::MpiGroup() {
   MPI_Comm_rank(node, &localRank_);
   MPI_Comm_size(node, &nodeSize_);
   MPI_Comm_free(&node);
+  const char *how = std::getenv("UVR_MPI_COMPOSITE");
+  sharedMemory_ = nodeSize_ == size_ && !(how && std::string(how) == "messages");
 }
 
-MpiGroup::~MpiGroup() { MPI_Finalize(); }
+MpiGroup::~MpiGroup() {
+  shared_.reset();
+  MPI_Finalize();
+}
 
 void MpiGroup::step(const std::function<void()> &work) {
   std::string error;
@@ -50,6 +89,7 @@ void MpiGroup::step(const std::function<void()> &work) {
     std::fprintf(stderr, "uvr: error: rank %d: %s\n", failed, error.c_str());
     std::fflush(stderr);
   }
+  shared_.reset(); // every rank is here
   MPI_Finalize();
   std::exit(2);
 }
@@ -148,6 +188,8 @@ std::vector<PixelBox> coloredRects(const uint16_t *rgba, int width, const std::v
 // 8-bit image resolves, at a quarter of the bytes of floats.
 constexpr float kChannelScale = 65535.f;
 
+uint8_t toByte(float v) { return uint8_t(std::clamp(v, 0.f, 1.f) * 255.f + 0.5f); }
+
 /// Copies the rectangles' pixels of the image (`width` pixels a row) to `out`, rectangle r at offsets[r].
 void pack(uint16_t *out, const uint16_t *rgba, int width, const std::vector<PixelBox> &rects,
           const std::vector<int> &offsets) {
@@ -160,6 +202,66 @@ void pack(uint16_t *out, const uint16_t *rgba, int width, const std::vector<Pixe
   }
 }
 
+/// A rank's coloured rectangle: its pixels' 4 channels, row after row.
+struct Layer {
+  PixelBox rect;
+  const uint16_t *rgba;
+};
+
+/// Composites the layers (front first) over rows [box.y0, box.y1) and columns [box.x0, box.x1) of the frame
+/// (outside which none has colour), over the background `under` into 8-bit RGB: `out` is the box's corner,
+/// `outStride` bytes a row. `scratch` holds a float row a row of the box.
+void compositeBox(const std::vector<Layer> &layers, const PixelBox &box, const float under[3],
+                  std::vector<float> &scratch, uint8_t *out, size_t outStride) {
+  scratch.resize(4 * pixels(box));
+  forRows(box.y0, box.y1, [&](int y) {
+    float *row = scratch.data() + size_t(y - box.y0) * rowChannels(box);
+    std::fill(row, row + rowChannels(box), 0.f);
+    for (const Layer &layer : layers) {
+      const PixelBox &rect = layer.rect;
+      if (y < rect.y0 || y >= rect.y1)
+        continue;
+      const uint16_t *from = layer.rgba + size_t(y - rect.y0) * rowChannels(rect);
+      for (float *pixel = row + 4 * size_t(rect.x0 - box.x0), *end = row + 4 * size_t(rect.x1 - box.x0);
+           pixel != end; pixel += 4, from += 4) {
+        // A ray stops once kTerminationOpacity opaque, the light it would still let through given the colour
+        // of what it last went through (compositeBehind): so does the composite, at a region's colour.
+        if (pixel[3] >= kTerminationOpacity || from[3] == 0)
+          continue;
+        float through = (1.f - pixel[3]) / kChannelScale;
+        if (pixel[3] + through * float(from[3]) >= kTerminationOpacity)
+          through = (1.f - pixel[3]) / float(from[3]);
+        for (int c = 0; c < 4; ++c)
+          pixel[c] += through * float(from[c]);
+      }
+    }
+    uint8_t *to = out + size_t(y - box.y0) * outStride;
+    for (const float *from = row, *end = row + rowChannels(box); from != end; from += 4, to += 3)
+      for (int c = 0; c < 3; ++c)
+        to[c] = toByte(from[c] + (1.f - from[3]) * under[c]);
+  });
+}
+
+/// Lays the background over each row of [y0, y1) of a `width`-pixel RGB frame outside [x0[y], x1[y]).
+void layBackground(uint8_t *frame, int width, int y0, int y1, const std::vector<int> &x0,
+                   const std::vector<int> &x1, const std::vector<uint8_t> &backgroundRow) {
+  forRows(y0, y1, [&](int y) {
+    uint8_t *row = frame + 3 * size_t(y) * size_t(width);
+    const size_t left = size_t(x0[size_t(y)]), right = size_t(x1[size_t(y)]);
+    std::copy(backgroundRow.data(), backgroundRow.data() + 3 * left, row);
+    std::copy(backgroundRow.data() + 3 * right, backgroundRow.data() + 3 * size_t(width), row + 3 * right);
+  });
+}
+
+/// A background row of `width` pixels, 8 bits a channel, rounded as a single process's frame is.
+std::vector<uint8_t> backgroundRowOf(Vec3f background, int width) {
+  const float under[3] = {background.x, background.y, background.z};
+  std::vector<uint8_t> row(3 * size_t(width));
+  for (size_t i = 0; i < row.size(); ++i)
+    row[i] = toByte(under[i % 3]);
+  return row;
+}
+
 } // namespace
 
 uint64_t MpiGroup::composite(const std::vector<uint16_t> &rgba, int width, int height,
@@ -170,7 +272,62 @@ uint64_t MpiGroup::composite(const std::vector<uint16_t> &rgba, int width, int h
   for (int r = 0; r <= size_; ++r)
     bands.push_back(int(int64_t(height) * r / size_));
   const size_t ranks = size_t(size_);
-  const int bandBegin = bands[size_t(rank_)], bandRows = bands[size_t(rank_) + 1] - bandBegin;
+  const int bandBegin = bands[size_t(rank_)], bandEnd = bands[size_t(rank_) + 1];
+  const float under[3] = {background.x, background.y, background.z};
+  const std::vector<uint8_t> backgroundRow = backgroundRowOf(background, width);
+  if (rank_ == 0) {
+    image.width = width;
+    image.height = height;
+    image.rgb.resize(3 * size_t(width) * size_t(height));
+  }
+  static_assert(sizeof(PixelBox) == 4 * sizeof(int));
+  const auto unite = [](PixelBox box, const PixelBox &rect) {
+    return pixels(rect) == 0 ? box
+                             : PixelBox{std::min(box.x0, rect.x0), std::max(box.x1, rect.x1),
+                                        std::min(box.y0, rect.y0), std::max(box.y1, rect.y1)};
+  };
+
+  if (sharedMemory_) {
+    // All ranks on one node: each lays its coloured rectangle in the shared window, and each composites its
+    // band from all of them, in place, into rank 0's frame there. Nothing is sent.
+    const size_t framePixels = size_t(width) * size_t(height);
+    if (!shared_ || shared_->pixels != framePixels)
+      shared_ = std::make_unique<SharedFrames>(framePixels, rank_, size_);
+    const PixelBox rect = coloredRects(rgba.data(), width, {0, height}, colour)[0];
+    pack(shared_->rgba[size_t(rank_)], rgba.data(), width, {rect}, {0});
+    std::vector<PixelBox> rects(ranks);
+    MPI_Allgather(&rect, 4, MPI_INT, rects.data(), 4, MPI_INT, MPI_COMM_WORLD);
+    shared_->fence();
+    std::vector<Layer> layers;
+    PixelBox box{width, 0, bandEnd, bandBegin};
+    for (const int r : order) {
+      layers.push_back({rects[size_t(r)], shared_->rgba[size_t(r)]});
+      box = unite(box, {rects[size_t(r)].x0, rects[size_t(r)].x1, std::max(rects[size_t(r)].y0, bandBegin),
+                        std::min(rects[size_t(r)].y1, bandEnd)});
+    }
+    if (!(box.y0 < box.y1))
+      box = {0, 0, bandBegin, bandBegin};
+    compositeBox(layers, box, under, band_,
+                 shared_->rgb + 3 * (size_t(box.y0) * size_t(width) + size_t(box.x0)), 3 * size_t(width));
+    std::vector<int> rowX0(size_t(height), width), rowX1(size_t(height), width);
+    for (int y = box.y0; y < box.y1; ++y) {
+      rowX0[size_t(y)] = box.x0;
+      rowX1[size_t(y)] = box.x1;
+    }
+    layBackground(shared_->rgb, width, bandBegin, bandEnd, rowX0, rowX1, backgroundRow);
+    shared_->fence();
+    if (rank_ == 0)
+      forRows(0, height, [&](int y) {
+        const uint8_t *row = shared_->rgb + 3 * size_t(y) * size_t(width);
+        std::copy(row, row + 3 * size_t(width), image.rgb.data() + 3 * size_t(y) * size_t(width));
+      });
+    shared_->fence(); // no rank writes the next frame's rectangle before rank 0 has this one
+    // What crossed between ranks: this rank's rectangle outside its band, and its band for rank 0.
+    uint64_t crossed = 0;
+    for (int y = rect.y0; y < rect.y1; ++y)
+      crossed += (y < bandBegin || y >= bandEnd) ? 4 * sizeof(uint16_t) * size_t(rect.x1 - rect.x0) : 0;
+    return crossed + (rank_ == 0 ? 0 : 3 * size_t(width) * size_t(bandEnd - bandBegin));
+  }
 
   // Each band's coloured rectangle to the rank that composites it, the rectangles first.
   const std::vector<PixelBox> sentRects = coloredRects(rgba.data(), width, bands, colour);
@@ -187,7 +344,6 @@ uint64_t MpiGroup::composite(const std::vector<uint16_t> &rgba, int width, int h
   }
   sent_.resize(size_t(sentTotal));
   pack(sent_.data(), rgba.data(), width, sentRects, sendOffsets);
-  static_assert(sizeof(PixelBox) == 4 * sizeof(int));
   MPI_Alltoall(sentRects.data(), 4, MPI_INT, receivedRects.data(), 4, MPI_INT, MPI_COMM_WORLD);
   for (size_t r = 0; r < ranks; ++r) {
     receiveOffsets[r] = receivedTotal;
@@ -198,62 +354,25 @@ uint64_t MpiGroup::composite(const std::vector<uint16_t> &rgba, int width, int h
   MPI_Alltoallv(sent_.data(), sendCounts.data(), sendOffsets.data(), MPI_UINT16_T, received_.data(),
                 receiveCounts.data(), receiveOffsets.data(), MPI_UINT16_T, MPI_COMM_WORLD);
 
-  // Over the background, once, 8 bits a channel, rounded as a single process's frame is.
-  const auto toByte = [](float v) { return uint8_t(std::clamp(v, 0.f, 1.f) * 255.f + 0.5f); };
-  const float under[3] = {background.x, background.y, background.z};
-  std::vector<uint8_t> backgroundRow(3 * size_t(width));
-  for (size_t i = 0; i < backgroundRow.size(); ++i)
-    backgroundRow[i] = toByte(under[i % 3]);
-
   // Front to back: each region's colour behind what the regions before it let through, over the rectangle
-  // that holds all they sent (outside it none has colour), row by row, and over the background into the
-  // frame's bytes for rank 0.
-  PixelBox mine{width, 0, bandBegin + bandRows, bandBegin};
-  for (const PixelBox &rect : receivedRects)
-    if (pixels(rect) > 0)
-      mine = {std::min(mine.x0, rect.x0), std::max(mine.x1, rect.x1), std::min(mine.y0, rect.y0),
-              std::max(mine.y1, rect.y1)};
+  // that holds all they sent, and over the background; rank 0 lays its band straight into the frame, the
+  // others into what they send it.
+  std::vector<Layer> layers;
+  PixelBox mine{width, 0, bandEnd, bandBegin};
+  for (const int r : order) {
+    layers.push_back({receivedRects[size_t(r)], received_.data() + receiveOffsets[size_t(r)]});
+    mine = unite(mine, receivedRects[size_t(r)]);
+  }
   if (!(mine.y0 < mine.y1))
     mine = {0, 0, bandBegin, bandBegin};
-  band_.resize(4 * pixels(mine));
-  // Rank 0 lays its band straight into the frame; the others into what they send it.
-  if (rank_ == 0) {
-    image.width = width;
-    image.height = height;
-    image.rgb.resize(3 * size_t(width) * size_t(height));
-  } else {
+  if (rank_ != 0)
     bandRgb_.resize(3 * pixels(mine));
-  }
-  const size_t outStride = rank_ == 0 ? 3 * size_t(width) : 3 * size_t(mine.x1 - mine.x0);
-  uint8_t *const out = rank_ == 0 ? image.rgb.data() + 3 * (size_t(mine.y0) * size_t(width) + size_t(mine.x0))
-                                  : bandRgb_.data();
-  forRows(mine.y0, mine.y1, [&](int y) {
-    float *row = band_.data() + size_t(y - mine.y0) * rowChannels(mine);
-    std::fill(row, row + rowChannels(mine), 0.f);
-    for (const int r : order) {
-      const PixelBox &rect = receivedRects[size_t(r)];
-      if (y < rect.y0 || y >= rect.y1)
-        continue;
-      const uint16_t *layer =
-          received_.data() + receiveOffsets[size_t(r)] + size_t(y - rect.y0) * rowChannels(rect);
-      for (float *pixel = row + 4 * size_t(rect.x0 - mine.x0), *end = row + 4 * size_t(rect.x1 - mine.x0);
-           pixel != end; pixel += 4, layer += 4) {
-        // A ray stops once kTerminationOpacity opaque, the light it would still let through given the colour
-        // of what it last went through (compositeBehind): so does the composite, at a region's colour.
-        if (pixel[3] >= kTerminationOpacity || layer[3] == 0)
-          continue;
-        float through = (1.f - pixel[3]) / kChannelScale;
-        if (pixel[3] + through * float(layer[3]) >= kTerminationOpacity)
-          through = (1.f - pixel[3]) / float(layer[3]);
-        for (int c = 0; c < 4; ++c)
-          pixel[c] += through * float(layer[c]);
-      }
-    }
-    uint8_t *to = out + size_t(y - mine.y0) * outStride;
-    for (const float *from = row, *end = row + rowChannels(mine); from != end; from += 4, to += 3)
-      for (int c = 0; c < 3; ++c)
-        to[c] = toByte(from[c] + (1.f - from[3]) * under[c]);
-  });
+  if (rank_ == 0)
+    compositeBox(layers, mine, under, band_,
+                 image.rgb.data() + 3 * (size_t(mine.y0) * size_t(width) + size_t(mine.x0)),
+                 3 * size_t(width));
+  else
+    compositeBox(layers, mine, under, band_, bandRgb_.data(), 3 * size_t(mine.x1 - mine.x0));
 
   // The composited bands' rectangles to rank 0, received straight into their place in the frame while it
   // lays the background around them.
@@ -284,12 +403,7 @@ uint64_t MpiGroup::composite(const std::vector<uint16_t> &rgba, int width, int h
       rowX0[size_t(y)] = rect.x0;
       rowX1[size_t(y)] = rect.x1;
     }
-  forRows(0, height, [&](int y) {
-    uint8_t *row = image.rgb.data() + 3 * size_t(y) * size_t(width);
-    const size_t x0 = size_t(rowX0[size_t(y)]), x1 = size_t(rowX1[size_t(y)]);
-    std::copy(backgroundRow.data(), backgroundRow.data() + 3 * x0, row);
-    std::copy(backgroundRow.data() + 3 * x1, backgroundRow.data() + 3 * size_t(width), row + 3 * x1);
-  });
+  layBackground(image.rgb.data(), width, 0, height, rowX0, rowX1, backgroundRow);
   MPI_Waitall(int(requests.size()), requests.data(), MPI_STATUSES_IGNORE);
   return sentBytes;
 }

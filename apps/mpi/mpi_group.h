@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <cstdlib>
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -64,7 +65,13 @@ public:
                      const PixelBox &colour, Vec3f background, Image &image);
 
 private:
+  struct SharedFrames;
+
   int rank_ = 0, size_ = 1, localRank_ = 0, nodeSize_ = 1;
+  /// Whether the ranks composite through memory they all map (all on one node; UVR_MPI_COMPOSITE=messages
+  /// in the environment says no) rather than by messages.
+  bool sharedMemory_ = false;
+  std::unique_ptr<SharedFrames> shared_;
   // The composite's buffers, kept across frames: fresh pages each frame cost more than the copies.
   std::vector<uint16_t> sent_, received_;
   std::vector<float> band_;
