@@ -9,6 +9,7 @@
 #include <uvr/error.h>
 #include <uvr/system.h>
 
+#include <cub/device/device_radix_sort.cuh>
 #include <cuda_runtime.h>
 
 #include <tbb/blocked_range.h>
@@ -48,9 +49,15 @@ template <class Sampling, int BlocksPerSm, bool kPreintegrate, bool kShade, bool
 __global__ void __launch_bounds__(kRenderBlockThreads, BlocksPerSm)
     renderKernel(SceneView scene, IntegratorSettings settings, CameraView camera, PixelTarget target,
                  int height, const uint64_t *crossingStart, const uint64_t *crossingKeys,
-                 SampleTotals *samples, ShadingSettings shading, const __grid_constant__ IsoSettings iso) {
-  const int x = int(blockIdx.x * blockDim.x + threadIdx.x);
-  const int y = int(blockIdx.y * blockDim.y + threadIdx.y);
+                 SampleTotals *samples, ShadingSettings shading, const __grid_constant__ IsoSettings iso,
+                 const uint32_t *tileOrder, uint32_t *tileCost) {
+  // Blocks start in the order of their index: the block of index i draws tile tileOrder[i] (the heaviest of
+  // the last frame first, where given), and adds the time its warps took to that tile's cost.
+  const long long begun = clock64();
+  const uint32_t block = blockIdx.x + gridDim.x * blockIdx.y;
+  const uint32_t tile = tileOrder ? tileOrder[block] : block;
+  const int x = int((tile % gridDim.x) * blockDim.x + threadIdx.x);
+  const int y = int((tile / gridDim.x) * blockDim.y + threadIdx.y);
   uint32_t taken = 0; // pixels past the frame's edge take none, and still join the warp's sums below
   if (x < target.width && y < height) {
     uint32_t hint = kNoCell; // no neighbouring ray to start from: the seed grid finds the first cell
@@ -74,6 +81,7 @@ __global__ void __launch_bounds__(kRenderBlockThreads, BlocksPerSm)
   if ((threadIdx.x + blockDim.x * threadIdx.y) % 32 == 0) {
     atomicAdd(&samples->total, total);
     atomicMax(&samples->max, most);
+    atomicAdd(&tileCost[tile], uint32_t(min((clock64() - begun) >> 6, 0xffffffffLL / 64)));
   }
 }
 
@@ -168,6 +176,13 @@ struct CudaBackend::Impl {
   float rowsMs = 0.f;
   bool tiles = false;
   std::vector<cudaEvent_t> pieceCopied; // per piece of the frame on its way back
+  // The order of the next frame's tiles (its blocks' places in the image): the heaviest of the last frame
+  // first, as a greedy scheduler would take them. Blocks in index order, the last ones heavy, left most SMs
+  // idle for a third of the kernel while a few finished them. The rays of consecutive frames are coherent.
+  DeviceBuffer<uint32_t> tileCost, tileCostSorted, tileIndex, tileOrder;
+  CubScratch tileScratch;
+  dim3 tileGrid, tileBlock; // what tileOrder is for
+  bool tileOrdered = false;
 
   ~Impl() {
     if (kernelStart)
@@ -385,10 +400,33 @@ SampleTotals CudaBackend::render(const CameraView &camera, const IntegratorSetti
           ? chooseRenderKernel<DeviceCellWalkSampling>(skipping, settings.preintegrate, settings.shade,
                                                        settings.iso)
           : chooseRenderKernel<DeviceSampling>(skipping, settings.preintegrate, settings.shade, settings.iso);
+  const uint32_t tiles = grid.x * grid.y;
+  if (grid.x != d.tileGrid.x || grid.y != d.tileGrid.y || block.x != d.tileBlock.x ||
+      block.y != d.tileBlock.y) {
+    d.tileGrid = grid;
+    d.tileBlock = block;
+    d.tileOrdered = false;
+    d.tileCost.resize(tiles);
+    d.tileCostSorted.resize(tiles);
+    d.tileOrder.resize(tiles);
+    std::vector<uint32_t> index(tiles);
+    for (uint32_t i = 0; i < tiles; ++i)
+      index[i] = i;
+    d.tileIndex.upload(index.data(), tiles);
+    UVR_CUDA_CHECK(cudaMemsetAsync(d.tileCost.data(), 0, d.tileCost.bytes()));
+  }
   UVR_CUDA_CHECK(cudaEventRecord(d.renderStart));
   kernel<<<grid, block>>>(d.scene, settings, deviceCamera, device, height, crossingStart, d.crossings.keys(),
-                          d.sampleTotals.data(), lit, d.iso);
+                          d.sampleTotals.data(), lit, d.iso, d.tileOrdered ? d.tileOrder.data() : nullptr,
+                          d.tileCost.data());
   UVR_CUDA_CHECK(cudaGetLastError());
+  d.tileScratch.run([&](void *storage, size_t &bytes) {
+    return cub::DeviceRadixSort::SortPairsDescending(storage, bytes, d.tileCost.data(),
+                                                     d.tileCostSorted.data(), d.tileIndex.data(),
+                                                     d.tileOrder.data(), int(tiles));
+  });
+  UVR_CUDA_CHECK(cudaMemsetAsync(d.tileCost.data(), 0, d.tileCost.bytes()));
+  d.tileOrdered = true;
   UVR_CUDA_CHECK(cudaEventRecord(d.kernelEnd));
   // The frame comes back through pinned memory, piece by piece, each copied on all cores into the caller's
   // arrays while the next crosses the bus: copies into pageable memory run at a fraction of the bus's speed.
@@ -458,7 +496,8 @@ SampleTotals CudaBackend::render(const CameraView &camera, const IntegratorSetti
 size_t CudaBackend::deviceMemoryBytes() const {
   const Impl &d = *impl_;
   return deviceSceneBytes() + d.rgb.bytes() + d.opacity.bytes() + d.samples.bytes() + d.rgba.bytes() +
-         d.rgba16.bytes() + d.sampleTotals.bytes() + d.crossings.bytes();
+         d.rgba16.bytes() + d.sampleTotals.bytes() + d.crossings.bytes() + d.tileCost.bytes() +
+         d.tileCostSorted.bytes() + d.tileIndex.bytes() + d.tileOrder.bytes();
 }
 
 size_t CudaBackend::devicePeakBytes() const {
