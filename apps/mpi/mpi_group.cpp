@@ -365,14 +365,14 @@ uint64_t MpiGroup::composite(const std::vector<uint16_t> &rgba, int width, int h
   }
   if (!(mine.y0 < mine.y1))
     mine = {0, 0, bandBegin, bandBegin};
-  if (rank_ != 0)
-    bandRgb_.resize(3 * pixels(mine));
-  if (rank_ == 0)
+  if (rank_ == 0) {
     compositeBox(layers, mine, under, band_,
                  image.rgb.data() + 3 * (size_t(mine.y0) * size_t(width) + size_t(mine.x0)),
                  3 * size_t(width));
-  else
+  } else {
+    bandRgb_.resize(3 * pixels(mine));
     compositeBox(layers, mine, under, band_, bandRgb_.data(), 3 * size_t(mine.x1 - mine.x0));
+  }
 
   // The composited bands' rectangles to rank 0, received straight into their place in the frame while it
   // lays the background around them.

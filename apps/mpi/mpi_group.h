@@ -56,11 +56,12 @@ public:
   std::vector<std::vector<int64_t>> allGather(const std::vector<int64_t> &values);
 
   /// Composites every rank's premultiplied RGBA image (`width` x `height`, 4 channels a pixel, 65535 for 1,
-  /// as FrameSettings::keepPremultipliedRgba16 gives it) front to back
-  /// in `order` (ranks, front first) by direct send: each rank composites a band of rows from every rank's
-  /// part of it, lays it over `background` and sends it to rank 0, which gathers the bands into `image`.
-  /// What travels is the rectangle of each band that holds colour: to the band's rank 16 bits a channel (this
-  /// rank's image has none outside `colour`), to rank 0 8-bit RGB. Returns the bytes this rank sent.
+  /// as FrameSettings::keepPremultipliedRgba16 gives it) front to back in `order` (ranks, front first) into
+  /// `image` at rank 0: each rank composites a band of rows from every rank's part of it (this rank's image
+  /// has colour only inside `colour`) and lays it over `background`. Where all ranks share a node, through a
+  /// window of memory they all map; otherwise by direct send, the rectangle of each band that holds colour
+  /// to the band's rank, 16 bits a channel, and each band to rank 0, 8-bit RGB. Returns the bytes this rank
+  /// passed to others.
   uint64_t composite(const std::vector<uint16_t> &rgba, int width, int height, const std::vector<int> &order,
                      const PixelBox &colour, Vec3f background, Image &image);
 

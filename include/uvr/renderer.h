@@ -56,8 +56,8 @@ struct FrameStats {
 };
 
 struct FrameResult {
-  Image
-      image; ///< RGB composited over the background, top row first; rgb empty unless FrameSettings::keepImage
+  /// RGB composited over the background, top row first; its rgb empty unless FrameSettings::keepImage.
+  Image image;
   std::vector<float> opacity;            ///< accumulated opacity per pixel, row-major; empty unless kept
   std::vector<uint32_t> samplesPerPixel; ///< row-major; empty unless kept
   /// Premultiplied red, green, blue and opacity per pixel, before the background, row-major, top row first;

@@ -80,7 +80,7 @@ MemoryLayout parseMemoryLayout(const std::string &name);
 constexpr uint32_t kMaxIsoSurfaces = 8;
 
 /// A ray stops once this opaque (early ray termination); what lies behind is taken to have the colour of
-/// the last stretch it went through (docs/design.md, "Early ray termination").
+/// the last stretch it went through (docs/design.md, "Opacity correction and compositing").
 constexpr float kTerminationOpacity = 0.99f;
 
 /// A leaf size that asks for the default: the cell count / 256, at least 64 (about 256 partitions).
