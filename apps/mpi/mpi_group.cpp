@@ -301,9 +301,12 @@ uint64_t MpiGroup::composite(const std::vector<uint16_t> &rgba, int width, int h
     std::vector<Layer> layers;
     PixelBox box{width, 0, bandEnd, bandBegin};
     for (const int r : order) {
-      layers.push_back({rects[size_t(r)], shared_->rgba[size_t(r)]});
-      box = unite(box, {rects[size_t(r)].x0, rects[size_t(r)].x1, std::max(rects[size_t(r)].y0, bandBegin),
-                        std::min(rects[size_t(r)].y1, bandEnd)});
+      const PixelBox &theirs = rects[size_t(r)];
+      layers.push_back({theirs, shared_->rgba[size_t(r)]});
+      const PixelBox inBand{theirs.x0, theirs.x1, std::max(theirs.y0, bandBegin),
+                            std::min(theirs.y1, bandEnd)};
+      if (inBand.y0 < inBand.y1)
+        box = unite(box, inBand);
     }
     if (!(box.y0 < box.y1))
       box = {0, 0, bandBegin, bandBegin};
