@@ -281,10 +281,12 @@ uint64_t MpiGroup::composite(const std::vector<uint16_t> &rgba, int width, int h
     image.rgb.resize(3 * size_t(width) * size_t(height));
   }
   static_assert(sizeof(PixelBox) == 4 * sizeof(int));
+  // An empty rectangle, or one clipped to nothing (its far edge before its near one), widens nothing.
   const auto unite = [](PixelBox box, const PixelBox &rect) {
-    return pixels(rect) == 0 ? box
-                             : PixelBox{std::min(box.x0, rect.x0), std::max(box.x1, rect.x1),
-                                        std::min(box.y0, rect.y0), std::max(box.y1, rect.y1)};
+    return !(rect.x0 < rect.x1 && rect.y0 < rect.y1)
+               ? box
+               : PixelBox{std::min(box.x0, rect.x0), std::max(box.x1, rect.x1), std::min(box.y0, rect.y0),
+                          std::max(box.y1, rect.y1)};
   };
 
   if (sharedMemory_) {
@@ -303,10 +305,7 @@ uint64_t MpiGroup::composite(const std::vector<uint16_t> &rgba, int width, int h
     for (const int r : order) {
       const PixelBox &theirs = rects[size_t(r)];
       layers.push_back({theirs, shared_->rgba[size_t(r)]});
-      const PixelBox inBand{theirs.x0, theirs.x1, std::max(theirs.y0, bandBegin),
-                            std::min(theirs.y1, bandEnd)};
-      if (inBand.y0 < inBand.y1)
-        box = unite(box, inBand);
+      box = unite(box, {theirs.x0, theirs.x1, std::max(theirs.y0, bandBegin), std::min(theirs.y1, bandEnd)});
     }
     if (!(box.y0 < box.y1))
       box = {0, 0, bandBegin, bandBegin};
