@@ -212,6 +212,38 @@ TEST(Isosurface, OfASphereIsClosedFromEveryView) {
   }
 }
 
+TEST(Isosurface, FoundBetweenTheMeshsBoundaryAndTheSamplesAcrossAGap) {
+  // Two slabs, z > 0.2 and z < -0.2, and f = z: each ray from above leaves the upper slab and comes back into
+  // the mesh across the gap between them. Surfaces a twentieth of a step inside the slabs' faces across the
+  // gap lie between a face and the nearest sample of most rays; every ray through the slabs meets them.
+  const auto height = [](Vec3f p) { return p.z; };
+  for (CellType type : {CellType::Tetra, CellType::Hexahedron}) {
+    const Mesh mesh = buildMesh(
+        keepCells(makeBoxGrid(type, 10, kBox, height), [](Vec3f c) { return std::fabs(c.z) > 0.2f; }),
+        "slabs");
+    Renderer renderer(mesh, mesh.findField("f"), 64);
+    renderer.setTransferFunction(transparent());
+    const Camera camera = cameraAt({0.3f, 0.2f, 4.f});
+    for (const float face : {0.2f, -0.2f}) {
+      RenderSettings settings = isoFrame({face + (face > 0.f ? 0.001f : -0.001f)});
+      const Frame frame = renderer.render(camera, settings);
+      const CameraView view = makeCameraView(camera, settings.width, settings.height);
+      int through = 0;
+      for (int y = 0; y < settings.height; ++y)
+        for (int x = 0; x < settings.width; ++x) {
+          const Ray ray = view.ray(x, y);
+          const Vec3f hit = ray.at((face - ray.origin.z) / ray.direction.z);
+          if (std::fabs(hit.x) > 0.9f || std::fabs(hit.y) > 0.9f)
+            continue;
+          ++through;
+          ASSERT_EQ(frame.opacity[size_t(y) * size_t(settings.width) + size_t(x)], 1.f)
+              << "a hole: cells " << int(type) << ", face " << face << ", pixel " << x << "," << y;
+        }
+      EXPECT_GT(through, 1000);
+    }
+  }
+}
+
 TEST(Isosurface, SkippingMarchesTransparentPartitionsThatHoldASurface) {
   const Mesh mesh = buildMesh(makeBoxGrid(
                                   CellType::Tetra, 12, kBox, [](Vec3f p) { return length(p); }, 0.3f),

@@ -60,29 +60,6 @@ template <typename Keep> void keepTets(Mesh &mesh, Keep &&keep) {
   mesh.tets = std::move(kept);
 }
 
-/// The cells of `grid` whose centre (the mean of their corners) `keep` takes, with the point field alone: the
-/// cell field's values would no longer match the cells.
-template <typename Keep> UnstructuredGrid keepCells(const UnstructuredGrid &grid, Keep &&keep) {
-  UnstructuredGrid kept = grid;
-  kept.offsets = {0};
-  kept.connectivity.clear();
-  kept.types.clear();
-  for (size_t c = 0; c + 1 < grid.offsets.size(); ++c) {
-    Vec3f centre{0.f, 0.f, 0.f};
-    const int64_t first = grid.offsets[c], last = grid.offsets[c + 1];
-    for (int64_t i = first; i < last; ++i)
-      centre = centre + grid.points[size_t(grid.connectivity[size_t(i)])] * (1.f / float(last - first));
-    if (!keep(centre))
-      continue;
-    kept.connectivity.insert(kept.connectivity.end(), grid.connectivity.begin() + first,
-                             grid.connectivity.begin() + last);
-    kept.offsets.push_back(int64_t(kept.connectivity.size()));
-    kept.types.push_back(grid.types[c]);
-  }
-  kept.fields.resize(1);
-  return kept;
-}
-
 /// Whether a cell centre lies in the notched shell: a boundary with concave parts and a cavity.
 bool inNotchedShell(Vec3f centre) {
   const float r = length(centre);

@@ -132,4 +132,25 @@ UnstructuredGrid makePyramidsAndTets(int n, const Box3f &box, const std::functio
   return grid;
 }
 
+UnstructuredGrid keepCells(const UnstructuredGrid &grid, const std::function<bool(Vec3f)> &keep) {
+  UnstructuredGrid kept = grid;
+  kept.offsets = {0};
+  kept.connectivity.clear();
+  kept.types.clear();
+  for (size_t c = 0; c + 1 < grid.offsets.size(); ++c) {
+    Vec3f centre{0.f, 0.f, 0.f};
+    const int64_t first = grid.offsets[c], last = grid.offsets[c + 1];
+    for (int64_t i = first; i < last; ++i)
+      centre = centre + grid.points[size_t(grid.connectivity[size_t(i)])] * (1.f / float(last - first));
+    if (!keep(centre))
+      continue;
+    kept.connectivity.insert(kept.connectivity.end(), grid.connectivity.begin() + first,
+                             grid.connectivity.begin() + last);
+    kept.offsets.push_back(int64_t(kept.connectivity.size()));
+    kept.types.push_back(grid.types[c]);
+  }
+  kept.fields.resize(1);
+  return kept;
+}
+
 } // namespace uvr

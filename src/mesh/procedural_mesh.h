@@ -20,4 +20,8 @@ UnstructuredGrid makeBoxGrid(CellType type, int n, const Box3f &box, const std::
 UnstructuredGrid makePyramidsAndTets(int n, const Box3f &box, const std::function<float(Vec3f)> &field,
                                      float jitter = 0.f, unsigned seed = 1);
 
+/// The cells of `grid` whose centre (the mean of their corners) `keep` takes, with the point field alone: the
+/// cell field's values would no longer match the cells.
+UnstructuredGrid keepCells(const UnstructuredGrid &grid, const std::function<bool(Vec3f)> &keep);
+
 } // namespace uvr

@@ -81,6 +81,8 @@ struct CrossingCursor {
   /// needs it at 0. Faces that no cell across was found for (pieces whose points were not joined) come in
   /// pairs, one in and one out, in either order where the two round differently, and are no gap.
   int depth = 0;
+  /// The last gap's ends, once the march has met it: where the ray last left the mesh and came back in.
+  float gapExit = -INFINITY, gapEntry = -INFINITY;
 };
 
 /// Where the ray leaves the gap in the mesh that holds t, if it lies in one: the crossing after the last one
@@ -102,6 +104,12 @@ UVR_HOST_DEVICE inline float afterGap(const BoundaryCrossings &crossings, float 
                           crossingT(key) - crossingT(crossings.keys[next - 1]) <= margin;
     cursor.depth += repeated ? 0 : exits ? -1 : 1;
     entered = exits ? kNoCell : crossingFace(key);
+    if (repeated)
+      continue;
+    if (exits)
+      cursor.gapExit = crossingT(key);
+    else
+      cursor.gapEntry = crossingT(key);
   }
   cursor.next = next;
   cursor.nextT = next < crossings.count ? crossingT(crossings.keys[next]) : INFINITY;
@@ -114,6 +122,8 @@ UVR_HOST_DEVICE inline float afterGap(const BoundaryCrossings &crossings, float 
   if (!(t > before + margin) || !(t < cursor.nextT - margin))
     return t;
   entered = crossingFace(crossings.keys[next]);
+  cursor.gapExit = before;
+  cursor.gapEntry = cursor.nextT;
   return cursor.nextT - margin;
 }
 

@@ -170,11 +170,16 @@ struct RayMarch : ShadeState<kShade || kIso>, IsoState<kIso> {
       if (!closing && intervals.hasGaps()) {
         uint32_t entered;
         const float resume = intervals.pastGap(t, entered);
+        if constexpr (kIso) {
+          if (entered != kNoCell && isoAcrossGap(color, samples, entered,
+                                                 resume > t ? grid.at(grid.indexAt(resume)) : t, walkSteps)) {
+            opaque = true;
+            break;
+          }
+        }
         if (entered != kNoCell)
           sampler.enter(boundaryFaceCell(scene.mesh, entered));
         if (resume > t) {
-          if constexpr (kIso)
-            this->lastValid = false; // the field is not continuous across the gap
           k = grid.indexAt(resume);
           t = grid.at(k);
           if (!(t < tb))
@@ -187,6 +192,14 @@ struct RayMarch : ShadeState<kShade || kIso>, IsoState<kIso> {
       // boundary's bulges, which the walk finds; the slow ways a missed sample takes would find nothing more
       // (on a GPU, a BVH query that keeps the warp waiting).
       const bool inside = locate(t, k, walkSteps, far, value, closing && intervals.pastMesh(t));
+      if constexpr (kIso) {
+        // A sample past where the ray left the mesh, the last one inside: a surface between them is found
+        // from just inside the exit.
+        if (!inside && isoBeforeExit(color, samples, intervals.exitBefore(t), walkSteps)) {
+          opaque = true;
+          break;
+        }
+      }
       const bool refining = kAligned > k;
       kNext = refining ? (inside ? kAligned : k + 1.f) : k + stride;
       if constexpr (kPreintegrate) {
@@ -262,14 +275,17 @@ struct RayMarch : ShadeState<kShade || kIso>, IsoState<kIso> {
     if constexpr (kIso) {
       // A surface between the last sample and the interval's end: the next interval may not go on from here.
       // Just before the end (where the ray's limit may end it); where that lies outside the mesh (the
-      // interval reaches a little past a boundary crossing), past the intervals' margin.
+      // interval reaches a little past a boundary crossing), just inside the crossing, or where none is
+      // known, past the intervals' margin.
       float tProbe = tb - 1e-4f * spacing;
       if (!opaque && this->lastValid && tProbe > this->lastT) {
         ++samples;
         float value;
         bool inside = sampler.probe(tProbe, walkSteps, false, value);
-        if (!inside && tb - 0.02f * spacing > this->lastT) {
-          tProbe = tb - 0.02f * spacing;
+        const float exit = intervals.exitBefore(tb);
+        const float inner = exit > -INFINITY ? exit - 0.01f * spacing : tb - 0.02f * spacing;
+        if (!inside && inner > this->lastT) {
+          tProbe = inner;
           ++samples;
           inside = sampler.probe(tProbe, walkSteps, false, value);
         }
@@ -421,6 +437,42 @@ private:
     // walk.
     if (moved)
       sampler.at.enter(this->lastCell);
+  }
+
+  /// Where the ray leaves the mesh and comes back in before the sample at `tNext` (a gap between its boundary
+  /// crossings, the last pastGap met) the field is not continuous: a surface between the last point and the
+  /// gap, or between the gap and the sample, is found from points just inside the gap's ends, as at an
+  /// interval's ends. `entered`: the face the ray comes back in by. True where the ray is then opaque.
+  UVR_HOST_DEVICE bool isoAcrossGap(Vec4f &color, uint32_t &samples, uint32_t entered, float tNext,
+                                    int walkSteps) {
+    const float entry = intervals.gapEntry();
+    if (!(entry > this->lastT))
+      return false; // met already
+    if (isoBeforeExit(color, samples, intervals.gapExit(), walkSteps))
+      return true;
+    this->lastValid = false;
+    const float nudge = 0.01f * intervals.grid().spacing;
+    if (!(entry + nudge < tNext))
+      return false;
+    sampler.enter(boundaryFaceCell(scene.mesh, entered));
+    ++samples;
+    float value;
+    const bool inside = sampler.probe(entry + nudge, walkSteps, false, value);
+    isoAt(color, samples, entry + nudge, value, inside, walkSteps);
+    return false;
+  }
+
+  /// Where the ray left the mesh at `exit` after the last point, which lay inside: a surface between them is
+  /// found from a point just inside the exit. True where the ray is then opaque.
+  UVR_HOST_DEVICE bool isoBeforeExit(Vec4f &color, uint32_t &samples, float exit, int walkSteps) {
+    const float tProbe = exit - 0.01f * intervals.grid().spacing;
+    if (!this->lastValid || !(tProbe > this->lastT))
+      return false;
+    ++samples;
+    float value;
+    const bool inside = sampler.probe(tProbe, walkSteps, false, value);
+    isoAt(color, samples, tProbe, value, inside, walkSteps);
+    return color.w >= settings.terminationOpacity;
   }
 
   /// Where `cell`, a tet the walk passed on the ray, holds the crossing of `target` in [lo, hi]: the field

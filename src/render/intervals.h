@@ -215,6 +215,19 @@ public:
   UVR_HOST_DEVICE float pastGap(float t, uint32_t &entered) {
     return afterGap(crossings_, t, margin_, cursor_, entered);
   }
+  /// Where the ray last left the mesh and came back in, as pastGap last met them.
+  UVR_HOST_DEVICE float gapExit() const { return cursor_.gapExit; }
+  UVR_HOST_DEVICE float gapEntry() const { return cursor_.gapEntry; }
+  /// Where the ray last left the mesh at or before t, where the skipping modes know it; else -inf.
+  UVR_HOST_DEVICE float exitBefore(float t) const {
+    if (!skip_)
+      return -INFINITY;
+    float exit = crossings_.keys ? cursor_.gapExit : crossings_.last;
+    for (uint32_t i = cursor_.next; i < crossings_.count && crossingT(crossings_.keys[i]) <= t; ++i)
+      if (crossingExits(crossings_.keys[i]))
+        exit = crossingT(crossings_.keys[i]);
+    return exit <= t ? exit : -INFINITY;
+  }
 
 private:
   /// Whether partitions of deviation `sigma` take step s1.
