@@ -282,12 +282,14 @@ struct RayMarch : ShadeState<kShade || kIso>, IsoState<kIso> {
         ++samples;
         float value;
         bool inside = sampler.probe(tProbe, walkSteps, false, value);
-        const float exit = intervals.exitBefore(tb);
-        const float inner = exit > -INFINITY ? exit - 0.01f * spacing : tb - 0.02f * spacing;
-        if (!inside && inner > this->lastT) {
-          tProbe = inner;
-          ++samples;
-          inside = sampler.probe(tProbe, walkSteps, false, value);
+        if (!inside) {
+          const float exit = intervals.exitBefore(tb);
+          const float inner = exit > -INFINITY ? exit - 0.01f * spacing : tb - 0.02f * spacing;
+          if (inner > this->lastT) {
+            tProbe = inner;
+            ++samples;
+            inside = sampler.probe(tProbe, walkSteps, false, value);
+          }
         }
         isoAt(color, samples, tProbe, value, inside, walkSteps);
         opaque = color.w >= settings.terminationOpacity;
